@@ -1,0 +1,423 @@
+//! Single-ray traversal and the assignment's ray/triangle test, one ray at a time.
+//!
+//! `intersect1` / `occluded1` are the scalar twins of `intersect8` / `occluded8`: the same
+//! steps in the same order with the same arithmetic, so every packet lane equals them bit for
+//! bit. `literal_hit` is the contract of SCENES.md §2 written out in f64, the yardstick the
+//! fast forms are held to.
+
+use super::{Accel, SLAB_FAR_SCALE, safe_inv};
+use crate::ray::{Hit, Ray};
+
+#[inline(always)]
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+#[inline(always)]
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+#[inline(always)]
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// The plane + barycentric test against SoA slot `i`; `Some((t, b1, b2))` when the ray hits
+/// with `tnear < t < tfar`. Steps (identical in the 8-wide kernel):
+#[inline(always)]
+pub fn hit_triangle1(
+    accel: &Accel,
+    i: usize,
+    o: [f32; 3],
+    d: [f32; 3],
+    tnear: f32,
+    tfar: f32,
+    cull: bool,
+) -> Option<(f32, f32, f32)> {
+    let tri = &accel.tris;
+    let n = tri.n(i);
+    let v0 = tri.v0(i);
+    // plane hit: t = <v0 - p, n> / <d, n>. A ray in the plane gives x/0 = inf or 0/0 = NaN,
+    // a zero-area triangle (n = 0) gives 0/0 = NaN; both fail the depth test below.
+    let dn = dot(d, n);
+    // culling: skip back faces (<d, n> >= 0); NaN is not culled here and fails below.
+    if cull && dn >= 0.0 {
+        return None;
+    }
+    let t = dot(sub(v0, o), n) / dn;
+    // depth test: NaN fails both comparisons and so misses.
+    if !(t > tnear && t < tfar) {
+        return None;
+    }
+    // barycentric: q = p + t d; each weight is the signed area of the sub-triangle opposite
+    // its vertex over the whole area, <cross(.., ..), n> / <n, n>.
+    let q = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
+    let a = sub(v0, q);
+    let b = sub(tri.v1(i), q);
+    let c = sub(tri.v2(i), q);
+    let inv = tri.inv_nn[i];
+    let b0 = dot(cross(b, c), n) * inv;
+    let b1 = dot(cross(c, a), n) * inv;
+    let b2 = dot(cross(a, b), n) * inv;
+    // inside when no coordinate is negative (NaN fails >= and so misses).
+    if b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0 {
+        Some((t, b1, b2))
+    } else {
+        None
+    }
+}
+
+/// Slab test: the entry distance when the ray meets the box within `[tnear, tfar]`, else `None`.
+#[inline(always)]
+fn hit_box1(
+    min: [f32; 3],
+    max: [f32; 3],
+    o: [f32; 3],
+    inv: [f32; 3],
+    tnear: f32,
+    tfar: f32,
+) -> Option<f32> {
+    let mut lo = tnear;
+    let mut hi = tfar;
+    for k in 0..3 {
+        let t0 = (min[k] - o[k]) * inv[k];
+        let t1 = (max[k] - o[k]) * inv[k];
+        lo = lo.max(t0.min(t1));
+        hi = hi.min(t0.max(t1));
+    }
+    (lo <= hi * SLAB_FAR_SCALE).then_some(lo)
+}
+
+/// Fixed-size traversal stack with a heap spill for pathological trees.
+pub(crate) struct Stack<T: Copy, const N: usize> {
+    items: [T; N],
+    len: usize,
+    spill: Vec<T>,
+}
+
+impl<T: Copy + Default, const N: usize> Stack<T, N> {
+    #[inline(always)]
+    pub(crate) fn new() -> Self {
+        Stack {
+            items: [T::default(); N],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+    #[inline(always)]
+    pub(crate) fn push(&mut self, v: T) {
+        if self.len < N {
+            self.items[self.len] = v;
+            self.len += 1;
+        } else {
+            self.spill.push(v);
+        }
+    }
+    #[inline(always)]
+    pub(crate) fn pop(&mut self) -> Option<T> {
+        if let Some(v) = self.spill.pop() {
+            return Some(v);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.items[self.len])
+    }
+}
+
+/// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
+#[inline(always)]
+fn traverse1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
+    if accel.nodes.is_empty() {
+        return None;
+    }
+    let o = ray.origin.to_array();
+    let d = ray.dir.to_array();
+    let inv = d.map(safe_inv);
+    let mut best: Option<Hit> = None;
+    let mut tfar = ray.tfar;
+    let root = accel.nodes[0];
+    hit_box1(root.min, root.max, o, inv, ray.tnear, tfar)?;
+    let mut stack: Stack<(u32, f32), 64> = Stack::new();
+    let mut node = 0u32;
+    loop {
+        let n = accel.nodes[node as usize];
+        if n.count > 0 {
+            for slot in n.first..n.first + n.count {
+                let slot = slot as usize;
+                if let Some((t, b1, b2)) = hit_triangle1(accel, slot, o, d, ray.tnear, tfar, cull) {
+                    // record hit: once a hit exists the limit is the next float above its t,
+                    // so an exact tie reaches here and keeps the lower original index; the
+                    // result does not depend on the visiting order (BVH == brute force exactly).
+                    let tri = accel.tris.prim[slot];
+                    if best.is_none_or(|b| t < b.t || tri < b.tri) {
+                        best = Some(Hit { tri, t, b1, b2 });
+                        tfar = t.next_up();
+                    }
+                    if ANY_HIT {
+                        return best;
+                    }
+                }
+            }
+        } else {
+            // ordered children: visit the nearer box first, push the farther one.
+            let (l, r) = (n.first, n.first + 1);
+            let (nl, nr) = (accel.nodes[l as usize], accel.nodes[r as usize]);
+            let tl = hit_box1(nl.min, nl.max, o, inv, ray.tnear, tfar);
+            let tr = hit_box1(nr.min, nr.max, o, inv, ray.tnear, tfar);
+            match (tl, tr) {
+                (Some(a), Some(b)) => {
+                    let (near, far, tf) = if a <= b { (l, r, b) } else { (r, l, a) };
+                    stack.push((far, tf));
+                    node = near;
+                    continue;
+                }
+                (Some(_), None) => {
+                    node = l;
+                    continue;
+                }
+                (None, Some(_)) => {
+                    node = r;
+                    continue;
+                }
+                (None, None) => {}
+            }
+        }
+        // pop the next node still in front of the closest hit.
+        loop {
+            match stack.pop() {
+                None => return best,
+                Some((next, tentry)) if tentry <= tfar * SLAB_FAR_SCALE => {
+                    node = next;
+                    break;
+                }
+                Some(_) => {}
+            }
+        }
+    }
+}
+
+/// Closest hit with `tnear < t < tfar`; back faces skipped when `cull`.
+pub fn intersect1(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
+    traverse1::<false>(accel, ray, cull)
+}
+
+/// Whether anything is hit with `tnear < t < tfar` (shadow rays).
+pub fn occluded1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
+    traverse1::<true>(accel, ray, cull).is_some()
+}
+
+/// Brute force: every triangle in SoA order, same kernel and tie rule (tests and checks).
+pub fn intersect_brute1(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
+    let o = ray.origin.to_array();
+    let d = ray.dir.to_array();
+    let mut best: Option<Hit> = None;
+    let mut tfar = ray.tfar;
+    for slot in 0..accel.tris.len() {
+        if let Some((t, b1, b2)) = hit_triangle1(accel, slot, o, d, ray.tnear, tfar, cull) {
+            let tri = accel.tris.prim[slot];
+            if best.is_none_or(|b| t < b.t || tri < b.tri) {
+                best = Some(Hit { tri, t, b1, b2 });
+                tfar = t.next_up();
+            }
+        }
+    }
+    best
+}
+
+/// SCENES.md §2 literally, in f64: `Ng = normalize(cross(v1 - v0, v2 - v0))`,
+/// `t = <v0 - p, Ng> / <d, Ng>`, `q = p + t d`, barycentrics from the three sub-triangle
+/// areas (signed by `Ng`), inside when none is negative. Returns `(t, b1, b2)`.
+pub fn literal_hit(
+    v: [[f64; 3]; 3],
+    o: [f64; 3],
+    d: [f64; 3],
+    tnear: f64,
+    tfar: f64,
+    cull: bool,
+) -> Option<(f64, f64, f64)> {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let c = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+    let len = dot(c, c).sqrt();
+    if len == 0.0 || !len.is_finite() {
+        return None; // zero-area triangles are never hit
+    }
+    let ng = c.map(|x| x / len);
+    let dn = dot(d, ng);
+    if cull && dn >= 0.0 {
+        return None;
+    }
+    let t = dot(sub(v[0], o), ng) / dn;
+    if !(t > tnear && t < tfar) {
+        return None;
+    }
+    let q = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
+    let area = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| dot(cross(sub(b, a), sub(c, a)), ng) * 0.5;
+    let whole = len * 0.5;
+    let b0 = area(q, v[1], v[2]) / whole;
+    let b1 = area(v[0], q, v[2]) / whole;
+    let b2 = area(v[0], v[1], q) / whole;
+    (b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0).then_some((t, b1, b2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::BuildQuality;
+    use glam::Vec3;
+
+    fn one(tri: [Vec3; 3]) -> Accel {
+        Accel::build(&[tri], BuildQuality::Medium)
+    }
+
+    const T: [Vec3; 3] = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 2.0, 0.0),
+    ];
+
+    fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
+        Ray::new(Vec3::from(o), Vec3::from(d), 0.0, f32::INFINITY)
+    }
+
+    #[test]
+    fn hand_computed_hit() {
+        // Ray down -z through (0.5, 0.25): t = 3, q = (0.5, 0.25, 0).
+        // Areas (x2): whole 4; opposite v1: q.x * 2 = 1 -> b1 = 0.25; opposite v2: q.y * 2 = 0.5 -> b2 = 0.125.
+        let a = one(T);
+        let h = intersect1(&a, &ray([0.5, 0.25, 3.0], [0.0, 0.0, -1.0]), true).unwrap();
+        assert_eq!((h.tri, h.t, h.b1, h.b2), (0, 3.0, 0.25, 0.125));
+        let l = literal_hit(
+            [[0.0; 3], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]],
+            [0.5, 0.25, 3.0],
+            [0.0, 0.0, -1.0],
+            0.0,
+            f64::INFINITY,
+            true,
+        )
+        .unwrap();
+        assert_eq!(l, (3.0, 0.25, 0.125));
+    }
+
+    #[test]
+    fn misses_outside_and_beyond_tfar_and_behind() {
+        let a = one(T);
+        assert!(
+            intersect1(&a, &ray([1.5, 1.5, 3.0], [0.0, 0.0, -1.0]), true).is_none(),
+            "outside the hypotenuse"
+        );
+        assert!(intersect1(&a, &ray([-0.1, 0.5, 3.0], [0.0, 0.0, -1.0]), true).is_none());
+        let mut r = ray([0.5, 0.5, 3.0], [0.0, 0.0, -1.0]);
+        r.tfar = 3.0;
+        assert!(intersect1(&a, &r, true).is_none(), "t == tfar is excluded");
+        r.tfar = 3.0001;
+        assert!(intersect1(&a, &r, true).is_some());
+        r.tnear = 3.0;
+        assert!(intersect1(&a, &r, true).is_none(), "t == tnear is excluded");
+        assert!(
+            intersect1(&a, &ray([0.5, 0.5, 3.0], [0.0, 0.0, 1.0]), false).is_none(),
+            "behind the origin"
+        );
+    }
+
+    #[test]
+    fn edges_and_vertices_count_as_inside() {
+        let a = one(T);
+        for (x, y) in [
+            (0.0, 0.0),
+            (2.0, 0.0),
+            (0.0, 2.0),
+            (1.0, 0.0),
+            (0.0, 1.0),
+            (1.0, 1.0),
+        ] {
+            assert!(
+                intersect1(&a, &ray([x, y, 1.0], [0.0, 0.0, -1.0]), true).is_some(),
+                "({x}, {y})"
+            );
+        }
+    }
+
+    #[test]
+    fn back_face_culling() {
+        let a = one(T);
+        let from_behind = ray([0.5, 0.5, -1.0], [0.0, 0.0, 1.0]);
+        assert!(intersect1(&a, &from_behind, true).is_none());
+        let h = intersect1(&a, &from_behind, false).unwrap();
+        assert_eq!(h.t, 1.0);
+        assert!(!occluded1(&a, &from_behind, true));
+        assert!(occluded1(&a, &from_behind, false));
+    }
+
+    #[test]
+    fn zero_area_and_in_plane_rays_never_hit() {
+        let flat = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
+        let a = one(flat);
+        for d in [[0.0, 0.0, -1.0], [0.0, -1.0, 0.0], [-1.0, 0.0, 0.0]] {
+            assert!(intersect1(&a, &ray([1.0, 1.0, 1.0], d), false).is_none());
+        }
+        let point = one([Vec3::ONE; 3]);
+        assert!(intersect1(&point, &ray([1.0, 1.0, 3.0], [0.0, 0.0, -1.0]), false).is_none());
+        // A ray running inside the triangle's plane.
+        let a = one(T);
+        assert!(intersect1(&a, &ray([-1.0, 0.5, 0.0], [1.0, 0.0, 0.0]), false).is_none());
+        assert!(
+            literal_hit(
+                [[0.0; 3], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]],
+                [-1.0, 0.5, 0.0],
+                [1.0, 0.0, 0.0],
+                0.0,
+                f64::INFINITY,
+                false
+            )
+            .is_none()
+        );
+    }
+
+    #[test]
+    fn nan_rays_miss() {
+        let a = one(T);
+        assert!(intersect1(&a, &ray([f32::NAN, 0.5, 1.0], [0.0, 0.0, -1.0]), false).is_none());
+        assert!(intersect1(&a, &ray([0.5, 0.5, 1.0], [0.0, f32::NAN, -1.0]), false).is_none());
+        assert!(!occluded1(&a, &ray([0.5, 0.5, 1.0], [f32::NAN; 3]), false));
+    }
+
+    #[test]
+    fn nearest_of_several_and_bvh_equals_brute_force() {
+        let mut tris = Vec::new();
+        for k in 0..50 {
+            let z = -(k as f32) * 0.1;
+            tris.push([
+                Vec3::new(-1.0, -1.0, z),
+                Vec3::new(1.0, -1.0, z),
+                Vec3::new(0.0, 1.0, z),
+            ]);
+        }
+        let a = Accel::build(&tris, BuildQuality::Medium);
+        let h = intersect1(&a, &ray([0.0, 0.0, 5.0], [0.0, 0.0, -1.0]), true).unwrap();
+        assert_eq!((h.tri, h.t), (0, 5.0));
+        let mut r = ray([0.0, 0.0, 5.0], [0.0, 0.0, -1.0]);
+        r.tnear = 5.05;
+        assert_eq!(intersect1(&a, &r, true).unwrap().tri, 1);
+        for i in 0..200 {
+            let f = i as f32 * 0.37;
+            let r = ray(
+                [f.sin() * 2.0, f.cos() * 2.0, 3.0],
+                [f.cos() * 0.3, f.sin() * 0.3, -1.0],
+            );
+            assert_eq!(intersect1(&a, &r, true), intersect_brute1(&a, &r, true));
+        }
+    }
+}

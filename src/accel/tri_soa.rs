@@ -1,0 +1,80 @@
+//! Triangles in structure-of-arrays form, permuted once into BVH leaf order.
+
+use glam::Vec3;
+
+/// What the plane + barycentric test needs, one array per component, in BVH order:
+/// the vertices, the plane normal `n = cross(v1 - v0, v2 - v0)` (unnormalised: twice the
+/// area, CCW = front) and `1 / <n, n>` to turn sub-triangle areas into barycentrics.
+/// `prim[slot]` is the triangle's index in the scene's original order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleSoa {
+    pub v0: [Vec<f32>; 3],
+    pub v1: [Vec<f32>; 3],
+    pub v2: [Vec<f32>; 3],
+    pub n: [Vec<f32>; 3],
+    pub inv_nn: Vec<f32>,
+    pub prim: Vec<u32>,
+}
+
+impl TriangleSoa {
+    /// Lay out `tris` in the order `order` (BVH leaf order; entries index `tris`).
+    ///
+    /// Degenerate policy: a triangle whose `<n, n>` is zero, subnormal or not finite is stored
+    /// with `n = 0`, so its plane test computes `0 / 0 = NaN`, which fails the depth test:
+    /// zero-area triangles are never hit.
+    pub fn new(tris: &[[Vec3; 3]], order: &[u32]) -> Self {
+        let mut s = TriangleSoa::default();
+        let len = order.len();
+        for a in [&mut s.v0, &mut s.v1, &mut s.v2, &mut s.n] {
+            for c in a.iter_mut() {
+                c.reserve_exact(len);
+            }
+        }
+        s.inv_nn.reserve_exact(len);
+        s.prim.reserve_exact(len);
+        for &p in order {
+            let [a, b, c] = tris[p as usize];
+            let n = (b - a).cross(c - a);
+            let nn = n.dot(n);
+            let (n, inv) = if nn.is_finite() && nn >= f32::MIN_POSITIVE {
+                (n, 1.0 / nn)
+            } else {
+                (Vec3::ZERO, 0.0)
+            };
+            for k in 0..3 {
+                s.v0[k].push(a[k]);
+                s.v1[k].push(b[k]);
+                s.v2[k].push(c[k]);
+                s.n[k].push(n[k]);
+            }
+            s.inv_nn.push(inv);
+            s.prim.push(p);
+        }
+        s
+    }
+
+    pub fn len(&self) -> usize {
+        self.prim.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.prim.is_empty()
+    }
+
+    #[inline(always)]
+    pub fn v0(&self, i: usize) -> [f32; 3] {
+        [self.v0[0][i], self.v0[1][i], self.v0[2][i]]
+    }
+    #[inline(always)]
+    pub fn v1(&self, i: usize) -> [f32; 3] {
+        [self.v1[0][i], self.v1[1][i], self.v1[2][i]]
+    }
+    #[inline(always)]
+    pub fn v2(&self, i: usize) -> [f32; 3] {
+        [self.v2[0][i], self.v2[1][i], self.v2[2][i]]
+    }
+    #[inline(always)]
+    pub fn n(&self, i: usize) -> [f32; 3] {
+        [self.n[0][i], self.n[1][i], self.n[2][i]]
+    }
+}

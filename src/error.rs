@@ -1,0 +1,69 @@
+//! One error type for everything a user can hand to whitted: files, scenes, options.
+
+use std::path::{Path, PathBuf};
+
+/// Every failure whitted reports. Each variant's message names the file (and the line where
+/// one applies) so a user can go straight to the problem.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The operating system refused to read or write a file.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A text file (mesh, scene, ray file) is malformed at a given line.
+    #[error("{}:{line}: {msg}", path.display())]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        msg: String,
+    },
+    /// An image file could not be decoded, encoded or is unusable (e.g. a bad cube-map face).
+    #[error("{}: {msg}", path.display())]
+    Image { path: PathBuf, msg: String },
+    /// A scene is well-formed but not valid (bad value, missing material, ...).
+    #[error("{}: {msg}", path.display())]
+    Scene { path: PathBuf, msg: String },
+    /// A file named by a scene was not found in any folder of the search path.
+    #[error("{}: cannot find '{name}'; searched: {}", scene.display(), searched.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))]
+    NotFound {
+        scene: PathBuf,
+        name: String,
+        searched: Vec<PathBuf>,
+    },
+    /// A command-line value is out of range.
+    #[error("{0}")]
+    Usage(String),
+}
+
+impl Error {
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+    pub fn parse(path: &Path, line: usize, msg: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.to_path_buf(),
+            line,
+            msg: msg.into(),
+        }
+    }
+    pub fn image(path: &Path, msg: impl Into<String>) -> Self {
+        Error::Image {
+            path: path.to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+    pub fn scene(path: &Path, msg: impl Into<String>) -> Self {
+        Error::Scene {
+            path: path.to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,407 @@
+//! MeshLib `.m` reader, hand-written and strict: `Vertex id x y z {attrs}`, `Face id a b c ...`.
+//!
+//! Accepted: `#` comments (any bytes inside them), CRLF, a UTF-8 BOM, E-notation, 1-based and
+//! non-contiguous ids of any size (a map, not an array), faces before the vertices they name,
+//! unknown attribute keys and record types (skipped), polygons (fan-triangulated).
+//! Refused with file and line: missing or extra coordinates, NaN / inf / out-of-range numbers,
+//! undefined or duplicate vertex ids, ids <= 0, malformed attribute tuples, unbalanced braces,
+//! binary data, no faces.
+
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use glam::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Attributes a vertex line may carry; `None` when absent.
+#[derive(Default)]
+struct VertexAttrs {
+    normal: Option<Vec3>,
+    uv: Option<Vec2>,
+    rgb: Option<Vec3>,
+}
+
+/// Read and parse a `.m` file. Warnings (degenerate faces, ...) are returned beside the mesh.
+pub fn load_m(path: &Path) -> Result<(Mesh, Vec<String>)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_m(&bytes, path)
+}
+
+/// Parse `.m` text; `path` is only used in messages.
+pub fn parse_m(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let err = |line: usize, msg: String| Error::parse(path, line, msg);
+
+    let mut ids: HashMap<u64, u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut attrs: Vec<(VertexAttrs, usize)> = Vec::new();
+    // (line, vertex ids) of each face, resolved once every vertex is known.
+    let mut faces: Vec<(usize, Vec<u64>)> = Vec::new();
+
+    for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let line_no = index + 1;
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        let trimmed = raw.trim_ascii_start();
+        if trimmed.is_empty() || trimmed[0] == b'#' {
+            continue;
+        }
+        if trimmed.contains(&0) {
+            return Err(err(
+                line_no,
+                "binary data (NUL byte); not a .m text file".into(),
+            ));
+        }
+        let text = std::str::from_utf8(trimmed).map_err(|_| {
+            err(
+                line_no,
+                "invalid UTF-8 outside a comment; not a .m text file".into(),
+            )
+        })?;
+        let (head, body) = split_braces(text).map_err(|m| err(line_no, m))?;
+        let mut tokens = head.split_ascii_whitespace();
+        match tokens.next() {
+            Some("Vertex") => {
+                let id = parse_id(tokens.next(), "vertex id").map_err(|m| err(line_no, m))?;
+                let mut xyz = [0f32; 3];
+                for (k, c) in xyz.iter_mut().enumerate() {
+                    let tok = tokens.next().ok_or_else(|| {
+                        err(
+                            line_no,
+                            format!("Vertex {id}: missing {} coordinate", ["x", "y", "z"][k]),
+                        )
+                    })?;
+                    *c = parse_f32(tok).map_err(|m| err(line_no, format!("Vertex {id}: {m}")))?;
+                }
+                if let Some(extra) = tokens.next() {
+                    return Err(err(
+                        line_no,
+                        format!("Vertex {id}: unexpected extra value '{extra}'"),
+                    ));
+                }
+                let a = parse_attrs(body.unwrap_or(""))
+                    .map_err(|m| err(line_no, format!("Vertex {id}: {m}")))?;
+                if ids.insert(id, positions.len() as u32).is_some() {
+                    return Err(err(line_no, format!("duplicate vertex id {id}")));
+                }
+                positions.push(Vec3::from(xyz));
+                attrs.push((a, line_no));
+            }
+            Some("Face") => {
+                let id = parse_id(tokens.next(), "face id").map_err(|m| err(line_no, m))?;
+                let verts = tokens
+                    .map(|t| parse_id(Some(t), "vertex id"))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
+                if verts.len() < 3 {
+                    return Err(err(
+                        line_no,
+                        format!("Face {id}: needs at least 3 vertices, has {}", verts.len()),
+                    ));
+                }
+                if let Some(b) = body {
+                    parse_attrs(b).map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
+                }
+                faces.push((line_no, verts));
+            }
+            // Edge, Corner and any other record type: not needed for rendering.
+            _ => {}
+        }
+    }
+
+    if faces.is_empty() {
+        return Err(err(0, "no faces".into()));
+    }
+    let mut triangles = Vec::with_capacity(faces.len());
+    for (line_no, verts) in &faces {
+        let idx = verts
+            .iter()
+            .map(|v| {
+                ids.get(v)
+                    .copied()
+                    .ok_or_else(|| err(*line_no, format!("face names undefined vertex {v}")))
+            })
+            .collect::<Result<Vec<u32>>>()?;
+        for k in 1..idx.len() - 1 {
+            triangles.push([idx[0], idx[k], idx[k + 1]]);
+        }
+    }
+
+    let mut warnings = Vec::new();
+    let normals = if attrs.iter().all(|(a, _)| a.normal.is_some()) {
+        Some(attrs.iter().map(|(a, _)| a.normal.unwrap()).collect())
+    } else if attrs.iter().any(|(a, _)| a.normal.is_some()) {
+        // Mixed: keep the given normals, fill the missing ones with area-weighted normals below.
+        warnings.push(format!(
+            "{}: some vertices have no normal; computing those",
+            path.display()
+        ));
+        Some(
+            attrs
+                .iter()
+                .map(|(a, _)| a.normal.unwrap_or(Vec3::ZERO))
+                .collect(),
+        )
+    } else {
+        None
+    };
+    let uvs = all_or_none(&attrs, |a| a.uv, "uv", path)?;
+    let colors = all_or_none(&attrs, |a| a.rgb, "rgb", path)?;
+    let mut mesh = Mesh {
+        positions,
+        triangles,
+        normals,
+        uvs,
+        colors,
+    };
+    mesh.ensure_normals();
+    let degenerate = mesh.degenerate_count();
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
+            path.display()
+        ));
+    }
+    Ok((mesh, warnings))
+}
+
+/// An attribute must be on every vertex or on none: a partial `uv` or `rgb` would render wrong.
+fn all_or_none<T: Copy>(
+    attrs: &[(VertexAttrs, usize)],
+    get: impl Fn(&VertexAttrs) -> Option<T>,
+    key: &str,
+    path: &Path,
+) -> Result<Option<Vec<T>>> {
+    if !attrs.iter().any(|(a, _)| get(a).is_some()) {
+        return Ok(None);
+    }
+    attrs
+        .iter()
+        .map(|(a, line)| {
+            get(a).ok_or_else(|| {
+                Error::parse(
+                    path,
+                    *line,
+                    format!("vertex has no {key}=(..) but other vertices do"),
+                )
+            })
+        })
+        .collect::<Result<Vec<T>>>()
+        .map(Some)
+}
+
+/// Split `head {body}` into its parts; the body must be the last thing on the line.
+fn split_braces(text: &str) -> Result<(&str, Option<&str>), String> {
+    let text = match text.find('#') {
+        // A trailing comment after the record (outside any braces).
+        Some(h) if !text[..h].contains('{') || text[..h].contains('}') => &text[..h],
+        _ => text,
+    };
+    match text.find('{') {
+        None if text.contains('}') => Err("unbalanced braces: '}' without '{'".into()),
+        None => Ok((text, None)),
+        Some(open) => {
+            let rest = text[open + 1..].trim_end();
+            let body = rest.strip_suffix('}').ok_or_else(|| {
+                "unbalanced braces: '{' without closing '}' at the end of the line".to_string()
+            })?;
+            if body.contains('{') || body.contains('}') {
+                return Err("unbalanced or nested braces".into());
+            }
+            Ok((&text[..open], Some(body)))
+        }
+    }
+}
+
+/// Parse `key=(a b c) key=value bare` attribute lists; keep `normal`, `uv` and `rgb`.
+fn parse_attrs(body: &str) -> Result<VertexAttrs, String> {
+    let mut out = VertexAttrs::default();
+    let mut rest = body.trim_start();
+    while !rest.is_empty() {
+        let key_end = rest
+            .find(|c: char| c == '=' || c.is_ascii_whitespace())
+            .unwrap_or(rest.len());
+        let key = &rest[..key_end];
+        rest = &rest[key_end..];
+        if let Some(after) = rest.strip_prefix('=') {
+            if let Some(tuple) = after.strip_prefix('(') {
+                let close = tuple
+                    .find(')')
+                    .ok_or_else(|| format!("{key}=(...: missing ')'"))?;
+                let inner = &tuple[..close];
+                if inner.contains('(') {
+                    return Err(format!("{key}=(...: unbalanced parentheses"));
+                }
+                rest = &tuple[close + 1..];
+                let want = match key {
+                    "normal" | "rgb" => 3,
+                    "uv" => 2,
+                    _ => 0,
+                };
+                if want > 0 {
+                    let nums = inner
+                        .split_ascii_whitespace()
+                        .map(parse_f32)
+                        .collect::<Result<Vec<f32>, String>>()
+                        .map_err(|m| format!("{key}=({inner}): {m}"))?;
+                    if nums.len() != want {
+                        return Err(format!(
+                            "{key}=({inner}): expected {want} numbers, found {}",
+                            nums.len()
+                        ));
+                    }
+                    match key {
+                        "normal" => out.normal = Some(Vec3::from_slice(&nums)),
+                        "uv" => out.uv = Some(Vec2::from_slice(&nums)),
+                        _ => out.rgb = Some(Vec3::from_slice(&nums)),
+                    }
+                }
+            } else {
+                if matches!(key, "normal" | "uv" | "rgb") {
+                    return Err(format!("{key}= must be followed by a tuple '(...)'"));
+                }
+                let end = after
+                    .find(|c: char| c.is_ascii_whitespace())
+                    .unwrap_or(after.len());
+                rest = &after[end..];
+            }
+        } else if key.is_empty() {
+            return Err("attribute list: unexpected character".into());
+        }
+        rest = rest.trim_start();
+    }
+    Ok(out)
+}
+
+fn parse_id(tok: Option<&str>, what: &str) -> Result<u64, String> {
+    let tok = tok.ok_or_else(|| format!("missing {what}"))?;
+    match tok.parse::<u64>() {
+        Ok(0) => Err(format!("{what} must be >= 1, found 0")),
+        Ok(v) => Ok(v),
+        Err(_) => Err(format!("{what} must be a positive integer, found '{tok}'")),
+    }
+}
+
+/// A finite number that fits in f32 (E-notation allowed; `nan`, `inf` refused).
+fn parse_f32(tok: &str) -> Result<f32, String> {
+    let v: f64 = tok
+        .parse()
+        .map_err(|_| format!("'{tok}' is not a number"))?;
+    if !v.is_finite() {
+        return Err(format!("'{tok}' is not a finite number"));
+    }
+    if v.abs() > f32::MAX as f64 {
+        return Err(format!("'{tok}' is out of range for f32"));
+    }
+    Ok(v as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<(Mesh, Vec<String>)> {
+        parse_m(s.as_bytes(), Path::new("t.m"))
+    }
+
+    fn err_of(s: &str) -> String {
+        parse(s).unwrap_err().to_string()
+    }
+
+    const QUAD: &str = "# a quad\nVertex 1 0 0 0 {uv=(0 0) rgb=(1 0 0)}\nVertex 2 1 0 0 {uv=(1 0) rgb=(0 1 0)}\n\
+        Vertex 5 1 1 0 {uv=(1 1) rgb=(0 0 1)}\nVertex 7 0 1 0 {uv=(0 1) rgb=(1 1 1) wid=3 father=(2)}\n\
+        Face 1 1 2 5\nFace 2 1 5 7\n";
+
+    #[test]
+    fn reads_vertices_faces_and_attributes() {
+        let (m, w) = parse(QUAD).unwrap();
+        assert!(w.is_empty());
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(m.uvs.as_ref().unwrap()[2], Vec2::new(1.0, 1.0));
+        assert_eq!(m.colors.as_ref().unwrap()[1], Vec3::Y);
+        // No normals in the file: area-weighted, facing +z.
+        assert!(
+            m.normals
+                .unwrap()
+                .iter()
+                .all(|n| (*n - Vec3::Z).length() < 1e-6)
+        );
+    }
+
+    #[test]
+    fn accepts_crlf_bom_enotation_comments_and_polygons() {
+        let text = "\u{feff}#      VERTICES\r\nVertex   10   1.0E+00  0.0e0 -0.0\r\nVertex 3 0 1E0 0 {normal=(0 0 1)}\r\n\
+            Face 1 10 3 99 4\r\nVertex 99 -1 0 0\r\nVertex 4 0 -1 0 # trailing\r\nEdge 1 2 {sharp}\r\n";
+        let mut bytes = text.as_bytes().to_vec();
+        bytes.extend_from_slice(b"# latin-1 comment \xE9\xE8\n");
+        let (m, w) = parse_m(&bytes, Path::new("t.m")).unwrap();
+        assert_eq!(m.triangles.len(), 2, "quad fan-triangulated");
+        assert_eq!(m.positions[0], Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(m.triangles[0], [0, 1, 2]);
+        assert!(w.iter().any(|w| w.contains("no normal")));
+    }
+
+    #[test]
+    fn very_large_ids_use_a_map() {
+        let (m, _) = parse("Vertex 18446744073709551615 0 0 0\nVertex 2 1 0 0\nVertex 3 0 1 0\nFace 1 18446744073709551615 2 3\n").unwrap();
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn refuses_bad_input_with_line() {
+        let cases = [
+            ("Vertex 1 0 0\nFace 1 1 1 1\n", ":1:", "missing z"),
+            ("Vertex 1 0 0 0 4\n", ":1:", "extra value"),
+            ("Vertex 1 0 nan 0\n", ":1:", "not a finite"),
+            ("Vertex 1 0 1e39 0\n", ":1:", "out of range"),
+            (
+                "Vertex 1 0 0 0\nVertex 1 1 0 0\n",
+                ":2:",
+                "duplicate vertex id 1",
+            ),
+            ("Vertex 0 0 0 0\n", ":1:", "must be >= 1"),
+            ("Vertex -3 0 0 0\n", ":1:", "positive integer"),
+            (
+                "Vertex 1 0 0 0 {normal=(1 2)}\n",
+                ":1:",
+                "expected 3 numbers",
+            ),
+            ("Vertex 1 0 0 0 {normal=(1 2 3}\n", ":1:", "missing ')'"),
+            ("Vertex 1 0 0 0 {uv=(1 2)\n", ":1:", "unbalanced braces"),
+            ("Vertex 1 0 0 0 uv=(1 2)}\n", ":1:", "unbalanced braces"),
+            (
+                "Vertex 1 0 0 0\nVertex 2 1 0 0\nVertex 3 0 1 0\nFace 1 1 2 4\n",
+                ":4:",
+                "undefined vertex 4",
+            ),
+            ("Vertex 1 0 0 0\nFace 1 1 1\n", ":2:", "at least 3"),
+            ("Vertex 1 0 0 0\n", ":0:", "no faces"),
+            ("\u{0}\u{1}binary", ":1:", "binary"),
+            (
+                "Vertex 1 0 0 0 {uv=(0 0)}\nVertex 2 1 0 0\nVertex 3 0 1 0\nFace 1 1 2 3\n",
+                ":2:",
+                "no uv",
+            ),
+        ];
+        for (text, line, what) in cases {
+            let e = err_of(text);
+            assert!(
+                e.starts_with("t.m") && e.contains(line) && e.contains(what),
+                "{text:?} -> {e}"
+            );
+        }
+        let e = parse_m(b"Vertex 1 \xff\xfe 0 0\n", Path::new("t.m"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("UTF-8"), "{e}");
+    }
+
+    #[test]
+    fn degenerate_faces_warn() {
+        let (m, w) =
+            parse("Vertex 1 0 0 0\nVertex 2 1 0 0\nVertex 3 0 1 0\nFace 1 1 2 3\nFace 2 1 1 2\n")
+                .unwrap();
+        assert_eq!(m.degenerate_count(), 1);
+        assert!(w[0].contains("1 degenerate"));
+    }
+}

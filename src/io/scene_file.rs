@@ -1,0 +1,698 @@
+//! The TOML scene format: parsing (`deny_unknown_fields`), validation, search-path resolution.
+//!
+//! Relative file names resolve against the scene file's folder, then the current folder, then
+//! each folder of `WHITTED_ASSETS` (`:`-separated). See the README for the format.
+
+use crate::error::{Error, Result};
+use crate::io::image::{load_cubemap, load_texture};
+use crate::io::load_mesh;
+use crate::mesh::Mesh;
+use crate::scene::{Albedo, Background, Light, Material, Object, Scene, View, shapes};
+use crate::texture::Texture;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Largest image accepted, in pixels (checked in u64 before anything is allocated):
+/// 2^28 = 268M pixels, e.g. 16384 x 16384 (7680 x 4320 is 33M).
+pub const MAX_PIXELS: u64 = 1 << 28;
+/// Deepest reflection / refraction recursion accepted.
+pub const MAX_DEPTH: u32 = 64;
+/// Most subdivision levels (each multiplies triangles by 4).
+pub const MAX_SUBDIVIDE: u32 = 6;
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub image: ImageDesc,
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub render: RenderDesc,
+    pub background: BackgroundDesc,
+    #[serde(default, rename = "light")]
+    pub lights: Vec<LightDesc>,
+    #[serde(default, rename = "material")]
+    pub materials: Vec<MaterialDesc>,
+    #[serde(default, rename = "mesh")]
+    pub meshes: Vec<MeshDesc>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImageDesc {
+    pub width: u64,
+    pub height: u64,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub eye: [f32; 3],
+    pub look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    pub vfov: f32,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDesc {
+    #[serde(default = "default_depth")]
+    pub depth: u32,
+    #[serde(default = "default_true")]
+    pub cull_backfaces: bool,
+    #[serde(default)]
+    pub ambient: [f32; 3],
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        RenderDesc {
+            depth: default_depth(),
+            cull_backfaces: true,
+            ambient: [0.0; 3],
+        }
+    }
+}
+
+fn default_depth() -> u32 {
+    1
+}
+fn default_true() -> bool {
+    true
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BackgroundDesc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f32; 3]>,
+    /// A folder with `posx negx posy negy posz negz` images.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cubemap: Option<String>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    pub position: [f32; 3],
+    pub intensity: [f32; 3],
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    pub name: String,
+    /// Exactly one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub vertex_color: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checker: Option<CheckerDesc>,
+    pub ka: f32,
+    pub kd: f32,
+    pub ks: f32,
+    pub n: f32,
+    #[serde(default)]
+    pub kt: f32,
+    #[serde(default = "default_ior")]
+    pub ior: f32,
+}
+
+fn default_ior() -> f32 {
+    1.5
+}
+
+/// A procedural checker texture: `squares x squares` cells alternating `a` and `b` (linear RGB).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CheckerDesc {
+    pub squares: u32,
+    pub a: [f32; 3],
+    pub b: [f32; 3],
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    pub material: String,
+    /// A `.m` or `.obj` file ...
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// ... or inline triangles (`vertices` + `faces`, 0-based, CCW = front) ...
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<Vec<[f32; 3]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub faces: Option<Vec<[u32; 3]>>,
+    /// ... or a generated shape: `sphere` (center, radius), `cube` (center, size), `quad`
+    /// (center, size; a horizontal square facing +y).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<[f32; 3]>,
+    /// Midpoint subdivision levels applied after loading (each x4 triangles).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub subdivide: u32,
+}
+
+fn is_zero(v: &u32) -> bool {
+    *v == 0
+}
+
+impl SceneFile {
+    /// Parse TOML text; errors carry the line and column of the offending key.
+    pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
+        toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
+                .unwrap_or(0);
+            let col = e
+                .span()
+                .map(|s| {
+                    let start = s.start.min(text.len());
+                    start - text[..start].rfind('\n').map_or(0, |i| i + 1) + 1
+                })
+                .unwrap_or(0);
+            Error::parse(path, line, format!("column {col}: {}", e.message()))
+        })
+    }
+
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("scene serialises")
+    }
+}
+
+/// Where scene files look for meshes and images.
+#[derive(Clone, Debug, Default)]
+pub struct SearchPath {
+    pub dirs: Vec<PathBuf>,
+}
+
+impl SearchPath {
+    /// The scene's folder (if any), the current folder, then `WHITTED_ASSETS` folders.
+    pub fn for_scene(scene_dir: Option<&Path>) -> Self {
+        let mut dirs = Vec::new();
+        if let Some(d) = scene_dir {
+            dirs.push(if d.as_os_str().is_empty() {
+                PathBuf::from(".")
+            } else {
+                d.to_path_buf()
+            });
+        }
+        dirs.push(std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")));
+        if let Some(list) = std::env::var_os("WHITTED_ASSETS") {
+            dirs.extend(std::env::split_paths(&list).filter(|p| !p.as_os_str().is_empty()));
+        }
+        SearchPath { dirs }
+    }
+
+    /// The first existing `dir/name`; an absolute `name` is used as it is.
+    pub fn resolve(&self, name: &str, scene: &Path) -> Result<PathBuf> {
+        let p = Path::new(name);
+        if p.is_absolute() {
+            return if p.exists() {
+                Ok(p.to_path_buf())
+            } else {
+                Err(Error::NotFound {
+                    scene: scene.to_path_buf(),
+                    name: name.into(),
+                    searched: vec![p.parent().unwrap_or(p).to_path_buf()],
+                })
+            };
+        }
+        self.dirs
+            .iter()
+            .map(|d| d.join(p))
+            .find(|c| c.exists())
+            .ok_or_else(|| Error::NotFound {
+                scene: scene.to_path_buf(),
+                name: name.into(),
+                searched: self.dirs.clone(),
+            })
+    }
+}
+
+fn finite3(v: [f32; 3], key: &str, path: &Path) -> Result<Vec3> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(Vec3::from(v))
+    } else {
+        Err(Error::scene(
+            path,
+            format!("{key}: every component must be a finite number"),
+        ))
+    }
+}
+
+fn nonneg3(v: [f32; 3], key: &str, path: &Path) -> Result<Vec3> {
+    let v = finite3(v, key, path)?;
+    if v.cmplt(Vec3::ZERO).any() {
+        return Err(Error::scene(path, format!("{key}: must be >= 0")));
+    }
+    Ok(v)
+}
+
+fn nonneg(v: f32, key: &str, path: &Path) -> Result<f32> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(Error::scene(
+            path,
+            format!("{key}: must be a finite number >= 0, found {v}"),
+        ))
+    }
+}
+
+/// Check an image size against the pixel cap, in u64, before anything is allocated.
+pub fn check_size(width: u64, height: u64) -> std::result::Result<(u32, u32), String> {
+    if width == 0 || height == 0 {
+        return Err(format!(
+            "image size {width}x{height}: width and height must be > 0"
+        ));
+    }
+    let pixels = width.saturating_mul(height);
+    if pixels > MAX_PIXELS || width > u32::MAX as u64 || height > u32::MAX as u64 {
+        return Err(format!(
+            "image size {width}x{height} is over the cap of {MAX_PIXELS} pixels"
+        ));
+    }
+    Ok((width as u32, height as u32))
+}
+
+/// Validate a parsed scene and load everything it names. `path` is the scene's name in
+/// messages; `search` finds its files.
+pub fn build_scene(
+    file: &SceneFile,
+    path: &Path,
+    search: &SearchPath,
+) -> Result<(Scene, Vec<String>)> {
+    let mut warnings = Vec::new();
+    let (width, height) = check_size(file.image.width, file.image.height)
+        .map_err(|m| Error::scene(path, format!("image: {m}")))?;
+
+    let c = &file.camera;
+    let eye = finite3(c.eye, "camera.eye", path)?;
+    let look_at = finite3(c.look_at, "camera.look_at", path)?;
+    let up = finite3(c.up, "camera.up", path)?;
+    if !(c.vfov > 0.0 && c.vfov < 180.0) {
+        return Err(Error::scene(
+            path,
+            format!("camera.vfov: must be in (0, 180) degrees, found {}", c.vfov),
+        ));
+    }
+    let forward = look_at - eye;
+    if forward.length_squared() == 0.0 || !forward.is_finite() {
+        return Err(Error::scene(
+            path,
+            "camera.look_at: must differ from camera.eye",
+        ));
+    }
+    let side = forward.normalize().cross(up);
+    if !(side.length() > 1e-6 * up.length()) || up.length_squared() == 0.0 {
+        return Err(Error::scene(
+            path,
+            "camera.up: must not be zero or parallel to the view direction",
+        ));
+    }
+
+    let r = &file.render;
+    if r.depth > MAX_DEPTH {
+        return Err(Error::scene(
+            path,
+            format!("render.depth: {} is over the cap of {MAX_DEPTH}", r.depth),
+        ));
+    }
+    let ambient = nonneg3(r.ambient, "render.ambient", path)?;
+
+    let background = match (&file.background.color, &file.background.cubemap) {
+        (Some(col), None) => Background::Color(nonneg3(*col, "background.color", path)?),
+        (None, Some(dir)) => {
+            Background::CubeMap(Arc::new(load_cubemap(&search.resolve(dir, path)?)?))
+        }
+        _ => {
+            return Err(Error::scene(
+                path,
+                "background: give exactly one of 'color' or 'cubemap'",
+            ));
+        }
+    };
+
+    let mut lights = Vec::new();
+    for (i, l) in file.lights.iter().enumerate() {
+        lights.push(Light {
+            position: finite3(l.position, &format!("light[{i}].position"), path)?,
+            intensity: nonneg3(l.intensity, &format!("light[{i}].intensity"), path)?,
+        });
+    }
+
+    let mut materials = Vec::new();
+    for (i, m) in file.materials.iter().enumerate() {
+        let key = |k: &str| format!("material[{i}] '{}'.{k}", m.name);
+        if materials.iter().any(|x: &Material| x.name == m.name) {
+            return Err(Error::scene(
+                path,
+                format!("material '{}' is defined twice", m.name),
+            ));
+        }
+        let sources = m.color.is_some() as u32
+            + m.vertex_color as u32
+            + m.texture.is_some() as u32
+            + m.checker.is_some() as u32;
+        if sources != 1 {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: give exactly one of color, vertex_color, texture, checker",
+                    key("color")
+                ),
+            ));
+        }
+        let albedo = if let Some(col) = m.color {
+            Albedo::Color(nonneg3(col, &key("color"), path)?)
+        } else if m.vertex_color {
+            Albedo::VertexColor
+        } else if let Some(t) = &m.texture {
+            Albedo::Texture(Arc::new(load_texture(&search.resolve(t, path)?)?))
+        } else {
+            let ch = m.checker.as_ref().expect("one source");
+            if !(1..=4096).contains(&ch.squares) {
+                return Err(Error::scene(
+                    path,
+                    format!("{}: squares must be in 1..=4096", key("checker")),
+                ));
+            }
+            let size = (ch.squares as usize * 16).min(4096);
+            Albedo::Texture(Arc::new(Texture::checker(
+                size,
+                ch.squares as usize,
+                nonneg3(ch.a, &key("checker.a"), path)?,
+                nonneg3(ch.b, &key("checker.b"), path)?,
+            )))
+        };
+        let ior = m.ior;
+        if !(ior.is_finite() && ior > 0.0) {
+            return Err(Error::scene(
+                path,
+                format!("{}: must be a finite number > 0, found {ior}", key("ior")),
+            ));
+        }
+        materials.push(Material {
+            name: m.name.clone(),
+            albedo,
+            ka: nonneg(m.ka, &key("ka"), path)?,
+            kd: nonneg(m.kd, &key("kd"), path)?,
+            ks: nonneg(m.ks, &key("ks"), path)?,
+            n: nonneg(m.n, &key("n"), path)?,
+            kt: nonneg(m.kt, &key("kt"), path)?,
+            ior,
+        });
+    }
+
+    let mut objects = Vec::new();
+    for (i, d) in file.meshes.iter().enumerate() {
+        let key = |k: &str| format!("mesh[{i}].{k}");
+        let material = materials
+            .iter()
+            .position(|m| m.name == d.material)
+            .ok_or_else(|| {
+                Error::scene(
+                    path,
+                    format!("{}: no material named '{}'", key("material"), d.material),
+                )
+            })?;
+        let (mesh, name) = mesh_of(d, i, path, search, &mut warnings)?;
+        if d.subdivide > MAX_SUBDIVIDE {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: {} is over the cap of {MAX_SUBDIVIDE}",
+                    key("subdivide"),
+                    d.subdivide
+                ),
+            ));
+        }
+        let mesh = if d.subdivide > 0 {
+            mesh.subdivide(d.subdivide)
+        } else {
+            mesh
+        };
+        match &materials[material].albedo {
+            Albedo::VertexColor if mesh.colors.is_none() => {
+                return Err(Error::scene(
+                    path,
+                    format!(
+                        "{}: material '{}' uses vertex colours but the mesh has no rgb",
+                        key("material"),
+                        d.material
+                    ),
+                ));
+            }
+            Albedo::Texture(_) if mesh.uvs.is_none() => {
+                return Err(Error::scene(
+                    path,
+                    format!(
+                        "{}: material '{}' is textured but the mesh has no uv",
+                        key("material"),
+                        d.material
+                    ),
+                ));
+            }
+            _ => {}
+        }
+        objects.push(Object {
+            name,
+            mesh,
+            material,
+        });
+    }
+
+    let scene = Scene {
+        width,
+        height,
+        view: View {
+            eye,
+            look_at,
+            up,
+            vfov: c.vfov,
+        },
+        ambient,
+        background,
+        lights,
+        materials,
+        objects,
+        cull_backfaces: r.cull_backfaces,
+        depth: r.depth,
+    };
+    Ok((scene, warnings))
+}
+
+fn mesh_of(
+    d: &MeshDesc,
+    i: usize,
+    path: &Path,
+    search: &SearchPath,
+    warnings: &mut Vec<String>,
+) -> Result<(Mesh, String)> {
+    let key = |k: &str| format!("mesh[{i}].{k}");
+    let sources = d.file.is_some() as u32 + d.vertices.is_some() as u32 + d.shape.is_some() as u32;
+    if sources != 1 {
+        return Err(Error::scene(
+            path,
+            format!(
+                "{}: give exactly one of file, vertices + faces, shape",
+                key("file")
+            ),
+        ));
+    }
+    if let Some(f) = &d.file {
+        let (mesh, w) = load_mesh(&search.resolve(f, path)?)?;
+        warnings.extend(w);
+        return Ok((mesh, d.name.clone().unwrap_or_else(|| f.clone())));
+    }
+    let name = d.name.clone().unwrap_or_else(|| format!("mesh{i}"));
+    let center = finite3(d.center.unwrap_or([0.0; 3]), &key("center"), path)?;
+    if let Some(verts) = &d.vertices {
+        let faces = d.faces.as_ref().ok_or_else(|| {
+            Error::scene(
+                path,
+                format!("{}: inline vertices need faces", key("faces")),
+            )
+        })?;
+        let positions = verts
+            .iter()
+            .enumerate()
+            .map(|(k, v)| finite3(*v, &format!("mesh[{i}].vertices[{k}]"), path))
+            .collect::<Result<Vec<_>>>()?;
+        if let Some((k, _)) = faces
+            .iter()
+            .enumerate()
+            .find(|(_, f)| f.iter().any(|&v| v as usize >= positions.len()))
+        {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "mesh[{i}].faces[{k}]: vertex index out of range (0..{})",
+                    positions.len()
+                ),
+            ));
+        }
+        if faces.is_empty() {
+            return Err(Error::scene(path, format!("{}: no faces", key("faces"))));
+        }
+        let mut mesh = Mesh {
+            positions,
+            triangles: faces.clone(),
+            ..Default::default()
+        };
+        mesh.ensure_normals();
+        return Ok((mesh, name));
+    }
+    let shape = d.shape.as_deref().unwrap_or_default();
+    let size = finite3(d.size.unwrap_or([1.0; 3]), &key("size"), path)?;
+    let mesh = match shape {
+        "sphere" => {
+            let radius = d.radius.unwrap_or(1.0);
+            if !(radius.is_finite() && radius > 0.0) {
+                return Err(Error::scene(
+                    path,
+                    format!("{}: must be > 0", key("radius")),
+                ));
+            }
+            shapes::sphere(center, radius, 48)
+        }
+        "cube" => shapes::cube(center, size * 0.5),
+        "quad" => shapes::quad(center, Vec3::X * size.x * 0.5, Vec3::NEG_Z * size.z * 0.5),
+        other => {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: unknown shape '{other}' (sphere, cube, quad)",
+                    key("shape")
+                ),
+            ));
+        }
+    };
+    Ok((mesh, name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[image]
+width = 4
+height = 3
+[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+vfov = 40
+[background]
+color = [0.1, 0.2, 0.3]
+[[material]]
+name = "m"
+color = [1, 1, 1]
+ka = 0.1
+kd = 0.9
+ks = 0
+n = 1
+[[mesh]]
+material = "m"
+vertices = [[-1, -1, 0], [1, -1, 0], [0, 1, 0]]
+faces = [[0, 1, 2]]
+"#;
+
+    fn build(text: &str) -> Result<Scene> {
+        let p = Path::new("s.toml");
+        let f = SceneFile::parse(text, p)?;
+        build_scene(&f, p, &SearchPath::for_scene(None)).map(|(s, _)| s)
+    }
+
+    #[test]
+    fn minimal_scene_loads_and_roundtrips() {
+        let s = build(MINIMAL).unwrap();
+        assert_eq!(
+            (s.width, s.height, s.depth, s.cull_backfaces),
+            (4, 3, 1, true)
+        );
+        assert_eq!(s.objects[0].mesh.triangles.len(), 1);
+        let f = SceneFile::parse(MINIMAL, Path::new("s")).unwrap();
+        assert_eq!(SceneFile::parse(&f.to_toml(), Path::new("s")).unwrap(), f);
+    }
+
+    #[test]
+    fn errors_name_key_or_line() {
+        let cases = [
+            (
+                MINIMAL.replace("vfov = 40", "vfov = 40\nfov = 3"),
+                "s.toml:9: column 1: unknown field `fov`",
+            ),
+            (MINIMAL.replace("vfov = 40", "vfov = 180"), "camera.vfov"),
+            (
+                MINIMAL.replace("width = 4", "width = 0"),
+                "width and height must be > 0",
+            ),
+            (
+                MINIMAL.replace(
+                    "width = 4\nheight = 3",
+                    "width = 4000000000\nheight = 4000000000",
+                ),
+                "over the cap",
+            ),
+            (
+                MINIMAL.replace("look_at = [0, 0, 0]", "look_at = [0, 0, 0]\nup = [0, 0, 1]"),
+                "camera.up",
+            ),
+            (MINIMAL.replace("kd = 0.9", "kd = nan"), "'m'.kd"),
+            (MINIMAL.replace("kd = 0.9", "kd = 0.9\nior = 0"), "ior"),
+            (
+                MINIMAL.replace("kd = 0.9", "kd = -1"),
+                ".kd: must be a finite number >= 0",
+            ),
+            (
+                MINIMAL.replace("material = \"m\"", "material = \"x\""),
+                "no material named 'x'",
+            ),
+            (
+                MINIMAL.replace("[[0, 1, 2]]", "[[0, 1, 3]]"),
+                "mesh[0].faces[0]",
+            ),
+            (
+                MINIMAL.replace("[[mesh]]", "[render]\ndepth = 1000\n[[mesh]]"),
+                "render.depth",
+            ),
+            (
+                MINIMAL.replace("color = [0.1, 0.2, 0.3]", "color = [-1, 0, 0]"),
+                "background.color",
+            ),
+            (
+                MINIMAL.replace(
+                    "vertices = [[-1, -1, 0], [1, -1, 0], [0, 1, 0]]\nfaces = [[0, 1, 2]]",
+                    "file = \"nope/missing.m\"",
+                ),
+                "cannot find 'nope/missing.m'; searched:",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = build(&text).unwrap_err().to_string();
+            assert!(
+                e.contains(want) && e.starts_with("s.toml"),
+                "want {want:?}, got {e}"
+            );
+        }
+    }
+}

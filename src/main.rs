@@ -1,0 +1,209 @@
+//! The `whitted` command line: parse arguments, load, render, save.
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::Ordering;
+use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
+use whitted::render::{Settings, Stage, World, render};
+use whitted::{Error, Result, scenes};
+
+#[derive(Parser)]
+#[command(
+    name = "whitted",
+    version,
+    about = "A data-oriented SIMD Whitted ray tracer over triangle meshes"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a built-in scene (phong, vertex_color, texture, cubemap, refraction, demo) or a
+    /// scene file; with no scene, the demo (needs no files).
+    Render(RenderArgs),
+    /// Print a built-in scene as an editable TOML file.
+    Scene {
+        /// phong, vertex_color, texture, cubemap, refraction or demo.
+        name: String,
+    },
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Built-in scene name or path to a `.toml` scene file.
+    scene: Option<String>,
+    /// Render one stage of the assignment: intersection, diffuse, specular, shadow, reflection.
+    #[arg(long)]
+    stage: Option<String>,
+    #[arg(long)]
+    width: Option<u64>,
+    #[arg(long)]
+    height: Option<u64>,
+    /// Recursion depth for reflection and refraction (overrides the scene and stage).
+    #[arg(long)]
+    depth: Option<u32>,
+    /// Samples per pixel (stratified, deterministic).
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 't')]
+    threads: Option<usize>,
+    /// Output image, `.png` (sRGB 8-bit) or `.exr` (linear float). Default: SCENE.png.
+    #[arg(long, short = 'o')]
+    outfile: Option<PathBuf>,
+    /// No progress bar and no summary.
+    #[arg(long, short = 'q')]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => cmd_render(args),
+        Command::Scene { name } => cmd_scene(&name),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// A built-in scene by name, or a scene file; returns it with its path (for messages) and
+/// the folder its relative paths start from.
+fn load_scene_file(arg: &str) -> Result<(SceneFile, PathBuf, Option<PathBuf>)> {
+    if let Some(s) = scenes::builtin(arg) {
+        return Ok((s, PathBuf::from(format!("<built-in scene {arg}>")), None));
+    }
+    let path = PathBuf::from(arg);
+    if !arg.ends_with(".toml") && !path.exists() {
+        return Err(Error::Usage(format!(
+            "'{arg}' is neither a built-in scene ({}) nor a .toml file",
+            scenes::NAMES.join(", ")
+        )));
+    }
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    let file = SceneFile::parse(&text, &path)?;
+    let dir = path.parent().map(Path::to_path_buf);
+    Ok((file, path, dir))
+}
+
+fn cmd_scene(name: &str) -> Result<()> {
+    let s = scenes::builtin(name).ok_or_else(|| {
+        Error::Usage(format!(
+            "no built-in scene '{name}' (try {})",
+            scenes::NAMES.join(", ")
+        ))
+    })?;
+    print!(
+        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, then the folders of WHITTED_ASSETS.\n{}",
+        s.to_toml()
+    );
+    Ok(())
+}
+
+fn cmd_render(args: RenderArgs) -> Result<()> {
+    let name = args.scene.clone().unwrap_or_else(|| "demo".into());
+    let (mut file, path, dir) = load_scene_file(&name)?;
+    if let Some(w) = args.width {
+        file.image.width = w;
+    }
+    if let Some(h) = args.height {
+        file.image.height = h;
+    }
+    check_size(file.image.width, file.image.height).map_err(Error::Usage)?;
+    let stage = match &args.stage {
+        None => None,
+        Some(s) => Some(Stage::from_name(s).ok_or_else(|| {
+            Error::Usage(format!(
+                "unknown stage '{s}' (intersection, diffuse, specular, shadow, reflection)"
+            ))
+        })?),
+    };
+    if let Some(d) = args.depth
+        && d > MAX_DEPTH
+    {
+        return Err(Error::Usage(format!(
+            "--depth {d} is over the cap of {MAX_DEPTH}"
+        )));
+    }
+    if args.spp == 0 || args.spp > 4096 {
+        return Err(Error::Usage("--spp must be in 1..=4096".into()));
+    }
+    let out = args.outfile.clone().unwrap_or_else(|| {
+        let stem = Path::new(&name)
+            .file_stem()
+            .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from(format!("{stem}.png"))
+    });
+    if !matches!(
+        out.extension().and_then(|e| e.to_str()),
+        Some("png" | "exr" | "PNG" | "EXR")
+    ) {
+        return Err(Error::Usage(format!(
+            "{}: output must be .png or .exr",
+            out.display()
+        )));
+    }
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| Error::Usage(format!("--threads {n}: {e}")))?;
+    }
+
+    let (scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    let world = World::new(scene);
+    let settings = Settings {
+        stage,
+        depth: args.depth,
+        spp: args.spp,
+    };
+    let (w, h) = (world.scene.width, world.scene.height);
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(w as u64 * h as u64);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}",
+            )
+            .expect("template"),
+        );
+        b
+    };
+    let (image, stats) = render(&world, &settings, &|n| bar.inc(n));
+    bar.finish_and_clear();
+    whitted::io::image::save_image(&image, &out)?;
+    if !args.quiet {
+        let r = &stats.rays;
+        let total = r.total();
+        let secs = stats.time.as_secs_f64();
+        eprintln!(
+            "{}x{} {} in {:.2} s (BVH {:.1} ms, {} triangles): {} rays (primary {}, shadow {}, reflection {}, refraction {}), {:.2} Mrays/s -> {}",
+            w,
+            h,
+            name,
+            secs,
+            world.accel.build_time.as_secs_f64() * 1e3,
+            world.accel.tris.len(),
+            total,
+            r.primary.load(Ordering::Relaxed),
+            r.shadow.load(Ordering::Relaxed),
+            r.reflection.load(Ordering::Relaxed),
+            r.refraction.load(Ordering::Relaxed),
+            total as f64 / secs / 1e6,
+            out.display()
+        );
+    }
+    Ok(())
+}

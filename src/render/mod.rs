@@ -1,0 +1,199 @@
+//! Rendering: the world (scene + geometry + BVH), stages, tiles, statistics.
+
+pub mod recursive;
+
+use crate::accel::{Accel, BuildQuality};
+use crate::camera::sample_offsets;
+use crate::image::Image;
+use crate::scene::{Geometry, Scene};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// The assignment's stages (SCENES.md §5); `None` renders the scene in full.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// White where a primary ray hits, background elsewhere; depth 0.
+    Intersection,
+    /// Ambient + diffuse, no shadows; depth 0.
+    Diffuse,
+    /// Ambient + diffuse + specular, no shadows; depth 0.
+    Specular,
+    /// Ambient + diffuse + specular with shadows; depth 0.
+    Shadow,
+    /// The full equation at the scene's depth.
+    Reflection,
+}
+
+impl Stage {
+    pub const ALL: [Stage; 5] = [
+        Stage::Intersection,
+        Stage::Diffuse,
+        Stage::Specular,
+        Stage::Shadow,
+        Stage::Reflection,
+    ];
+
+    pub fn name(self) -> &'static str {
+        [
+            "intersection",
+            "diffuse",
+            "specular",
+            "shadow",
+            "reflection",
+        ][self as usize]
+    }
+
+    pub fn from_name(s: &str) -> Option<Stage> {
+        Stage::ALL.into_iter().find(|st| st.name() == s)
+    }
+}
+
+/// Which terms of the equation are on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Terms {
+    pub white: bool,
+    pub specular: bool,
+    pub shadows: bool,
+}
+
+impl Terms {
+    pub fn of(stage: Option<Stage>) -> Terms {
+        use Stage::*;
+        Terms {
+            white: stage == Some(Intersection),
+            specular: !matches!(stage, Some(Intersection | Diffuse)),
+            shadows: !matches!(stage, Some(Intersection | Diffuse | Specular)),
+        }
+    }
+}
+
+/// Options of one render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub stage: Option<Stage>,
+    /// Recursion depth; `None` uses the stage's (0 below `reflection`) or the scene's.
+    pub depth: Option<u32>,
+    /// Samples per pixel (stratified, deterministic).
+    pub spp: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            stage: None,
+            depth: None,
+            spp: 1,
+        }
+    }
+}
+
+impl Settings {
+    pub fn depth(&self, scene: &Scene) -> u32 {
+        match (self.depth, self.stage) {
+            (Some(d), _) => d,
+            (
+                None,
+                Some(Stage::Intersection | Stage::Diffuse | Stage::Specular | Stage::Shadow),
+            ) => 0,
+            (None, _) => scene.depth,
+        }
+    }
+}
+
+/// A scene ready to render: flattened geometry, its BVH, the offset `eps`.
+pub struct World {
+    pub scene: Scene,
+    pub geometry: Geometry,
+    pub accel: Accel,
+    /// `1e-5 L`, `L` the scene bounding-box diagonal (secondary-ray origin offset).
+    pub eps: f32,
+}
+
+impl World {
+    pub fn new(scene: Scene) -> World {
+        let geometry = scene.geometry();
+        let tris: Vec<[Vec3; 3]> = (0..geometry.triangles.len() as u32)
+            .map(|t| geometry.triangle(t))
+            .collect();
+        let accel = Accel::build(&tris, BuildQuality::default());
+        let eps = 1e-5 * geometry.diagonal();
+        World {
+            scene,
+            geometry,
+            accel,
+            eps,
+        }
+    }
+}
+
+/// Rays traced, by kind.
+#[derive(Debug, Default)]
+pub struct RayCounts {
+    pub primary: AtomicU64,
+    pub shadow: AtomicU64,
+    pub reflection: AtomicU64,
+    pub refraction: AtomicU64,
+}
+
+impl RayCounts {
+    pub fn total(&self) -> u64 {
+        [
+            &self.primary,
+            &self.shadow,
+            &self.reflection,
+            &self.refraction,
+        ]
+        .iter()
+        .map(|c| c.load(Ordering::Relaxed))
+        .sum()
+    }
+}
+
+/// What a render measured.
+#[derive(Debug, Default)]
+pub struct RenderStats {
+    pub rays: RayCounts,
+    pub time: Duration,
+}
+
+/// Tile edge in pixels: small enough to balance threads, big enough for coherent packets.
+pub const TILE: u32 = 16;
+
+/// Render `world` with the scalar reference engine (`recursive::trace1` per sample).
+/// `progress(pixels)` is called as tiles finish.
+pub fn render(
+    world: &World,
+    settings: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Image, RenderStats) {
+    let start = Instant::now();
+    let (w, h) = (world.scene.width, world.scene.height);
+    let stats = RenderStats::default();
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect();
+    let offsets = sample_offsets(settings.spp);
+    let results: Vec<((u32, u32), Vec<Vec3>)> = tiles
+        .par_iter()
+        .map(|&(x0, y0)| {
+            let pixels = recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays);
+            progress(pixels.len() as u64);
+            ((x0, y0), pixels)
+        })
+        .collect();
+    let mut image = Image::new(w as usize, h as usize);
+    for ((x0, y0), pixels) in results {
+        let tw = TILE.min(w - x0) as usize;
+        for (k, p) in pixels.into_iter().enumerate() {
+            let (x, y) = (x0 as usize + k % tw, y0 as usize + k / tw);
+            image.pixels[y * w as usize + x] = p;
+        }
+    }
+    let stats = RenderStats {
+        time: start.elapsed(),
+        ..stats
+    };
+    (image, stats)
+}

@@ -1,0 +1,68 @@
+//! The scalar reference renderer: `trace1(ray, depth)` recursion over `intersect1` / `occluded1`.
+
+use super::{RayCounts, Settings, TILE, Terms, World};
+use crate::accel::intersect1;
+use crate::ray::Ray;
+use crate::shade::{SecondaryKind, shade1};
+use glam::Vec3;
+use std::sync::atomic::Ordering;
+
+/// Colour seen along `ray` with `depth` bounces left.
+pub fn trace1(world: &World, terms: Terms, ray: &Ray, depth: u32, counts: &mut [u64; 4]) -> Vec3 {
+    let Some(hit) = intersect1(&world.accel, ray, world.scene.cull_backfaces) else {
+        return world.scene.background.sample(ray.dir);
+    };
+    if terms.white {
+        return Vec3::ONE;
+    }
+    let (mut color, secondaries) = shade1(world, terms, ray, &hit, depth, &mut counts[1]);
+    for s in secondaries.into_iter().flatten() {
+        counts[2 + (s.kind == SecondaryKind::Refraction) as usize] += 1;
+        color += s.weight * trace1(world, terms, &s.ray, depth - 1, counts);
+    }
+    color
+}
+
+/// Render the tile with top-left corner `(x0, y0)`; pixels row-major within the tile.
+pub fn render_tile(
+    world: &World,
+    settings: &Settings,
+    offsets: &[(f32, f32)],
+    x0: u32,
+    y0: u32,
+    rays: &RayCounts,
+) -> Vec<Vec3> {
+    let camera = world.scene.camera();
+    let terms = Terms::of(settings.stage);
+    let depth = settings.depth(&world.scene);
+    let (x1, y1) = (
+        (x0 + TILE).min(camera.width),
+        (y0 + TILE).min(camera.height),
+    );
+    let mut counts = [0u64; 4];
+    let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+    let scale = 1.0 / offsets.len() as f32;
+    for j in y0..y1 {
+        for i in x0..x1 {
+            let mut c = Vec3::ZERO;
+            for &(dx, dy) in offsets {
+                let ray = camera.ray_at(i as f32 + dx, j as f32 + dy);
+                counts[0] += 1;
+                c += trace1(world, terms, &ray, depth, &mut counts);
+            }
+            out.push(c * scale);
+        }
+    }
+    for (a, c) in [
+        &rays.primary,
+        &rays.shadow,
+        &rays.reflection,
+        &rays.refraction,
+    ]
+    .into_iter()
+    .zip(counts)
+    {
+        a.fetch_add(c, Ordering::Relaxed);
+    }
+    out
+}

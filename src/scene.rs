@@ -1,0 +1,287 @@
+//! A loaded, validated scene: camera, lights, materials, objects, background, options.
+
+use crate::camera::Camera;
+use crate::mesh::Mesh;
+use crate::texture::{CubeMap, Texture};
+use glam::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// A point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub position: Vec3,
+    pub intensity: Vec3,
+}
+
+/// Where a surface's colour `Od` comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Albedo {
+    Color(Vec3),
+    /// The interpolated per-vertex `rgb` of the mesh.
+    VertexColor,
+    /// The bilinear texture colour at the interpolated `uv`.
+    Texture(Arc<Texture>),
+}
+
+/// Whitted material: `ka kd ks n kt ior` and the colour source.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub albedo: Albedo,
+    pub ka: f32,
+    pub kd: f32,
+    pub ks: f32,
+    pub n: f32,
+    pub kt: f32,
+    pub ior: f32,
+}
+
+/// What a ray that hits nothing sees.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Background {
+    Color(Vec3),
+    CubeMap(Arc<CubeMap>),
+}
+
+impl Background {
+    pub fn sample(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Background::Color(c) => *c,
+            Background::CubeMap(m) => m.sample(dir),
+        }
+    }
+}
+
+/// A mesh placed in the scene with its material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    pub name: String,
+    pub mesh: Mesh,
+    pub material: usize,
+}
+
+/// Camera placement as written in a scene (the image size is separate so it can be overridden).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    pub eye: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    pub vfov: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub width: u32,
+    pub height: u32,
+    pub view: View,
+    pub ambient: Vec3,
+    pub background: Background,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub objects: Vec<Object>,
+    pub cull_backfaces: bool,
+    pub depth: u32,
+}
+
+impl Scene {
+    pub fn camera(&self) -> Camera {
+        let v = &self.view;
+        Camera::new(v.eye, v.look_at, v.up, v.vfov, self.width, self.height)
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
+    }
+
+    /// Flatten every object into one triangle list with per-vertex shading attributes.
+    pub fn geometry(&self) -> Geometry {
+        let mut g = Geometry::default();
+        for (oi, o) in self.objects.iter().enumerate() {
+            let base = g.positions.len() as u32;
+            let m = &o.mesh;
+            g.positions.extend_from_slice(&m.positions);
+            let normals = m
+                .normals
+                .clone()
+                .unwrap_or_else(|| m.area_weighted_normals());
+            g.normals.extend(normals);
+            match &m.uvs {
+                Some(uv) => g.uvs.extend_from_slice(uv),
+                None => g
+                    .uvs
+                    .extend(std::iter::repeat_n(Vec2::ZERO, m.positions.len())),
+            }
+            match &m.colors {
+                Some(c) => g.colors.extend_from_slice(c),
+                None => g
+                    .colors
+                    .extend(std::iter::repeat_n(Vec3::ONE, m.positions.len())),
+            }
+            g.triangles
+                .extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
+            g.tri_object
+                .extend(std::iter::repeat_n(oi as u32, m.triangles.len()));
+        }
+        g
+    }
+}
+
+/// All triangles of a scene in one list (the order of objects, then of each mesh's faces),
+/// with per-vertex normals, uvs and colours for shading.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Geometry {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub colors: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    pub tri_object: Vec<u32>,
+}
+
+impl Geometry {
+    pub fn triangle(&self, t: u32) -> [Vec3; 3] {
+        self.triangles[t as usize].map(|i| self.positions[i as usize])
+    }
+
+    /// Length of the bounding-box diagonal (`L` of the secondary-ray offset rule).
+    pub fn diagonal(&self) -> f32 {
+        let Some(&first) = self.positions.first() else {
+            return 0.0;
+        };
+        let (lo, hi) = self
+            .positions
+            .iter()
+            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        (hi - lo).length()
+    }
+}
+
+/// Meshes generated in code, for the demo scene and for `shape = ...` in scene files.
+pub mod shapes {
+    use super::*;
+
+    /// A UV sphere with outward normals and `(u, v)` = (longitude, latitude) in [0, 1].
+    pub fn sphere(center: Vec3, radius: f32, segments: u32) -> Mesh {
+        let (nu, nv) = (segments.max(3) * 2, segments.max(2));
+        let mut m = Mesh::default();
+        let (mut pos, mut nor, mut uv) = (Vec::new(), Vec::new(), Vec::new());
+        for j in 0..=nv {
+            let theta = std::f32::consts::PI * j as f32 / nv as f32;
+            for i in 0..=nu {
+                let phi = std::f32::consts::TAU * i as f32 / nu as f32;
+                let n = Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    -theta.sin() * phi.sin(),
+                );
+                pos.push(center + radius * n);
+                nor.push(n);
+                uv.push(Vec2::new(i as f32 / nu as f32, 1.0 - j as f32 / nv as f32));
+            }
+        }
+        let idx = |i: u32, j: u32| j * (nu + 1) + i;
+        for j in 0..nv {
+            for i in 0..nu {
+                let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+                if j != 0 {
+                    m.triangles.push([a, d, b]);
+                }
+                if j != nv - 1 {
+                    m.triangles.push([b, d, c]);
+                }
+            }
+        }
+        m.positions = pos;
+        m.normals = Some(nor);
+        m.uvs = Some(uv);
+        m
+    }
+
+    /// An axis-aligned box with flat faces (each face has its own vertices and uv square).
+    pub fn cube(center: Vec3, half: Vec3) -> Mesh {
+        let mut m = Mesh {
+            normals: Some(Vec::new()),
+            uvs: Some(Vec::new()),
+            ..Default::default()
+        };
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let n = Vec3::AXES[axis] * sign;
+                let s = Vec3::AXES[(axis + 1) % 3] * sign;
+                let t = Vec3::AXES[(axis + 2) % 3];
+                let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+                let base = m.positions.len() as u32;
+                for (cs, ct) in corners {
+                    m.positions.push(center + (n + cs * s + ct * t) * half);
+                    m.normals.as_mut().unwrap().push(n);
+                    m.uvs
+                        .as_mut()
+                        .unwrap()
+                        .push(Vec2::new((cs + 1.0) * 0.5, (ct + 1.0) * 0.5));
+                }
+                m.triangles.push([base, base + 1, base + 2]);
+                m.triangles.push([base, base + 2, base + 3]);
+            }
+        }
+        m
+    }
+
+    /// A rectangle through `center` spanned by `s` and `t` (half extents), facing `s x t`,
+    /// with uv (0,0) at `center - s - t` and (1,1) at `center + s + t`.
+    pub fn quad(center: Vec3, s: Vec3, t: Vec3) -> Mesh {
+        let n = s.cross(t).normalize();
+        Mesh {
+            positions: vec![
+                center - s - t,
+                center + s - t,
+                center + s + t,
+                center - s + t,
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            normals: Some(vec![n; 4]),
+            uvs: Some(vec![
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(1.0, 1.0),
+                Vec2::new(0.0, 1.0),
+            ]),
+            colors: None,
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn shapes_are_closed_and_outward() {
+            let s = sphere(Vec3::ZERO, 2.0, 8);
+            // (The uv seam and the poles duplicate vertices, so open_edges() is not 0.)
+            assert_eq!(s.degenerate_count(), 0);
+            for t in 0..s.triangles.len() {
+                let c = s.triangles[t]
+                    .iter()
+                    .map(|&i| s.positions[i as usize])
+                    .sum::<Vec3>();
+                assert!(
+                    s.face_cross(t).dot(c) > 0.0,
+                    "sphere face {t} faces inwards"
+                );
+            }
+            let c = cube(Vec3::ONE, Vec3::splat(0.5));
+            for t in 0..c.triangles.len() {
+                let centroid = c.triangles[t]
+                    .iter()
+                    .map(|&i| c.positions[i as usize])
+                    .sum::<Vec3>()
+                    / 3.0;
+                assert!(
+                    c.face_cross(t).dot(centroid - Vec3::ONE) > 0.0,
+                    "cube face {t}"
+                );
+            }
+            let q = quad(Vec3::ZERO, Vec3::X, Vec3::NEG_Z);
+            assert!(q.face_cross(0).normalize().abs_diff_eq(Vec3::Y, 1e-6));
+        }
+    }
+}

@@ -1,0 +1,183 @@
+//! Whitted's equation at one hit (SCENES.md §3), the scalar reference `shade1`.
+//!
+//! `I = Ia ka Od + sum_i S_i Ip_i [kd Od max(<N,l_i>,0) + ks max(<v,r_i>,0)^n] + ks Ir + kt It`
+
+use crate::accel::occluded1;
+use crate::ray::{Hit, Ray, offset_origin, reflect, refract};
+use crate::render::{Terms, World};
+use crate::scene::{Albedo, Material};
+use glam::Vec3;
+
+/// Everything shading needs at a hit point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// `q = p + t d`.
+    pub q: Vec3,
+    /// Geometric and shading normals, both flipped to face the ray on a back-face hit.
+    pub ng: Vec3,
+    pub n: Vec3,
+    /// The ray hit a back face (`<d, Ng> > 0`): it is leaving the object.
+    pub back: bool,
+    pub od: Vec3,
+    pub material: u32,
+}
+
+/// A reflection or refraction ray with the weight (`ks` or `kt`) its colour is added with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Secondary {
+    pub ray: Ray,
+    pub weight: Vec3,
+    pub kind: SecondaryKind,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SecondaryKind {
+    Reflection,
+    Refraction,
+}
+
+/// Interpolate the hit: normal, colour, uv; flip normals on back faces.
+pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
+    let g = &world.geometry;
+    let [i0, i1, i2] = g.triangles[hit.tri as usize].map(|i| i as usize);
+    let (b1, b2) = (hit.b1, hit.b2);
+    let b0 = 1.0 - b1 - b2;
+    let q = ray.origin + hit.t * ray.dir;
+    let [p0, p1, p2] = [g.positions[i0], g.positions[i1], g.positions[i2]];
+    let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    // shading normal: interpolated and normalised; the geometric normal if that vanishes.
+    let mut n = (b0 * g.normals[i0] + b1 * g.normals[i1] + b2 * g.normals[i2])
+        .try_normalize()
+        .unwrap_or(ng);
+    // back face: flip Ng and N before shading.
+    let back = ray.dir.dot(ng) > 0.0;
+    if back {
+        ng = -ng;
+        n = -n;
+    }
+    let material = g.tri_object[hit.tri as usize];
+    let m = &world.scene.materials[world.scene.objects[material as usize].material];
+    let od = match &m.albedo {
+        Albedo::Color(c) => *c,
+        Albedo::VertexColor => b0 * g.colors[i0] + b1 * g.colors[i1] + b2 * g.colors[i2],
+        Albedo::Texture(t) => t.sample_uv(b0 * g.uvs[i0] + b1 * g.uvs[i1] + b2 * g.uvs[i2]),
+    };
+    Surface {
+        q,
+        ng,
+        n,
+        back,
+        od,
+        material: world.scene.objects[material as usize].material as u32,
+    }
+}
+
+/// Shadow ray from `q` towards a light: offset origin, unit direction, `tfar` = distance to
+/// the light from the offset origin.
+pub fn shadow_ray(s: &Surface, light: Vec3, eps: f32) -> Ray {
+    let l = (light - s.q).normalize();
+    let origin = offset_origin(s.q, s.ng, l, eps);
+    Ray::new(origin, l, 0.0, (light - origin).length())
+}
+
+/// The local part of the equation (ambient + lights) at `s`, seen along `d`, with `visible(i)`
+/// giving `S_i` for light `i` (called only where light `i` can contribute).
+pub fn direct1(
+    world: &World,
+    terms: Terms,
+    s: &Surface,
+    d: Vec3,
+    mut visible: impl FnMut(usize) -> bool,
+) -> Vec3 {
+    let m: &Material = &world.scene.materials[s.material as usize];
+    let sc = &world.scene;
+    // ambient
+    let mut color = sc.ambient * m.ka * s.od;
+    let v = -d.normalize();
+    for (i, light) in sc.lights.iter().enumerate() {
+        let l = (light.position - s.q).normalize();
+        let ndotl = s.n.dot(l);
+        // Both terms vanish where <N, l> <= 0 (the specular one by definition), so no shadow
+        // ray is needed there.
+        if !(ndotl > 0.0) {
+            continue;
+        }
+        // shadow
+        if terms.shadows && !visible(i) {
+            continue;
+        }
+        // diffuse
+        let mut c = m.kd * s.od * ndotl;
+        // specular: r = 2 <N, l> N - l
+        if terms.specular {
+            let r = 2.0 * ndotl * s.n - l;
+            c += Vec3::splat(m.ks * v.dot(r).max(0.0).powf(m.n));
+        }
+        color += light.intensity * c;
+    }
+    color
+}
+
+/// Reflection and refraction rays leaving `s` (none at depth 0).
+pub fn secondaries1(world: &World, s: &Surface, d: Vec3, depth: u32) -> [Option<Secondary>; 2] {
+    let m = &world.scene.materials[s.material as usize];
+    let mut out = [None, None];
+    if depth == 0 {
+        return out;
+    }
+    let d = d.normalize();
+    let dr = reflect(d, s.n).normalize();
+    // reflection: d_r = d - 2 <d, N> N
+    if m.ks > 0.0 {
+        out[0] = Some(Secondary {
+            ray: Ray::new(
+                offset_origin(s.q, s.ng, dr, world.eps),
+                dr,
+                0.0,
+                f32::INFINITY,
+            ),
+            weight: Vec3::splat(m.ks),
+            kind: SecondaryKind::Reflection,
+        });
+    }
+    // refraction: eta = 1/ior entering through a front face, ior leaving through a back face;
+    // total internal reflection traces It along d_r.
+    if m.kt > 0.0 {
+        let eta = if s.back { m.ior } else { 1.0 / m.ior };
+        let dt = refract(d, s.n, eta).map_or(dr, |t| t.normalize());
+        out[1] = Some(Secondary {
+            ray: Ray::new(
+                offset_origin(s.q, s.ng, dt, world.eps),
+                dt,
+                0.0,
+                f32::INFINITY,
+            ),
+            weight: Vec3::splat(m.kt),
+            kind: SecondaryKind::Refraction,
+        });
+    }
+    out
+}
+
+/// Shade one hit: local illumination with shadow rays traced by `occluded1`, plus the
+/// secondary rays to trace. `stats[0]` counts the shadow rays traced.
+pub fn shade1(
+    world: &World,
+    terms: Terms,
+    ray: &Ray,
+    hit: &Hit,
+    depth: u32,
+    shadow_rays: &mut u64,
+) -> (Vec3, [Option<Secondary>; 2]) {
+    let s = surface(world, ray, hit);
+    let cull = world.scene.cull_backfaces;
+    let color = direct1(world, terms, &s, ray.dir, |i| {
+        *shadow_rays += 1;
+        !occluded1(
+            &world.accel,
+            &shadow_ray(&s, world.scene.lights[i].position, world.eps),
+            cull,
+        )
+    });
+    (color, secondaries1(world, &s, ray.dir, depth))
+}

@@ -1,0 +1,231 @@
+//! Renders of every canonical scene and stage, checked for what SCENES.md says must hold.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::{settings, world};
+use glam::Vec3;
+use whitted::accel::intersect1;
+use whitted::image::Image;
+use whitted::render::{Stage, World, render};
+
+const W: u64 = 96;
+const H: u64 = 72;
+
+fn draw(w: &World, stage: Option<Stage>) -> Image {
+    render(w, &settings(stage), &|_| {}).0
+}
+
+/// Primary-hit object per pixel (`None` = background).
+fn objects(w: &World) -> Vec<Option<u32>> {
+    let cam = w.scene.camera();
+    (0..w.scene.height)
+        .flat_map(|j| (0..w.scene.width).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            intersect1(&w.accel, &cam.primary_ray(i, j), w.scene.cull_backfaces)
+                .map(|h| w.geometry.tri_object[h.tri as usize])
+        })
+        .collect()
+}
+
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+#[test]
+fn background_in_corners_and_kitten_in_centre_for_every_scene() {
+    for name in ["phong", "vertex_color", "texture", "cubemap", "refraction"] {
+        let w = world(name, W, H);
+        let cam = w.scene.camera();
+        let img = draw(&w, Some(Stage::Intersection));
+        let (cx, cy) = (W as usize / 2, H as usize / 2);
+        assert_eq!(img.get(cx, cy), Vec3::ONE, "{name}: kitten in the centre");
+        for (x, y) in [(0, 0), (W as usize - 1, 0)] {
+            let bg = w
+                .scene
+                .background
+                .sample(cam.primary_ray(x as u32, y as u32).dir);
+            assert_eq!(img.get(x, y), bg, "{name}: background at corner ({x}, {y})");
+        }
+        // Only white and background in the intersection stage.
+        let hits = objects(&w);
+        for (k, p) in img.pixels.iter().enumerate() {
+            assert_eq!(*p == Vec3::ONE, hits[k].is_some(), "{name}: pixel {k}");
+        }
+    }
+}
+
+#[test]
+fn every_scene_and_stage_renders_finite() {
+    for name in ["phong", "vertex_color", "texture", "cubemap", "refraction"] {
+        let w = world(name, 32, 24);
+        for stage in [None].into_iter().chain(Stage::ALL.map(Some)) {
+            let img = draw(&w, stage);
+            assert!(
+                img.pixels
+                    .iter()
+                    .all(|p| p.is_finite() && p.min_element() >= 0.0),
+                "{name} {stage:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn phong_stages_add_terms_in_order() {
+    let w = world("phong", W, H);
+    let hits = objects(&w);
+    let [inter, diffuse, specular, shadow, reflection] = Stage::ALL.map(|s| draw(&w, Some(s)));
+    let full = draw(&w, None);
+    assert_eq!(
+        full, reflection,
+        "without a stage the scene renders in full"
+    );
+    let mut differ = [0; 3];
+    for k in 0..hits.len() {
+        let (d, s, sh, r) = (
+            diffuse.pixels[k],
+            specular.pixels[k],
+            shadow.pixels[k],
+            reflection.pixels[k],
+        );
+        if hits[k].is_none() {
+            // Background pixels are the same in every stage.
+            assert!(
+                d == s && s == sh && sh == r && r == inter.pixels[k],
+                "pixel {k}"
+            );
+            continue;
+        }
+        assert!(s.cmpge(d).all(), "specular adds light: {k}");
+        assert!(sh.cmple(s + 1e-6).all(), "shadows only remove light: {k}");
+        assert!(r.cmpge(sh - 1e-6).all(), "reflection only adds light: {k}");
+        differ[0] += (s != d) as usize;
+        differ[1] += (sh != s) as usize;
+        differ[2] += (r != sh) as usize;
+    }
+    assert!(
+        differ.iter().all(|&n| n > 20),
+        "each stage changes many pixels: {differ:?}"
+    );
+}
+
+#[test]
+fn floor_in_shadow_is_darker_than_lit_floor() {
+    let w = world("phong", W, H);
+    let hits = objects(&w);
+    let img = draw(&w, Some(Stage::Shadow));
+    let unshadowed = draw(&w, Some(Stage::Specular));
+    let floor = 1; // objects: kitten, floor
+    let (mut dark, mut lit) = (vec![], vec![]);
+    for k in 0..hits.len() {
+        if hits[k] == Some(floor) {
+            let l = luminance(img.pixels[k]);
+            if img.pixels[k] != unshadowed.pixels[k] {
+                dark.push(l)
+            } else {
+                lit.push(l)
+            }
+        }
+    }
+    assert!(
+        dark.len() > 30 && lit.len() > 30,
+        "{} {}",
+        dark.len(),
+        lit.len()
+    );
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    assert!(
+        mean(&dark) < 0.8 * mean(&lit),
+        "shadowed {} vs lit {}",
+        mean(&dark),
+        mean(&lit)
+    );
+}
+
+#[test]
+fn reflection_differs_from_shadow_only_on_reflective_surfaces() {
+    // In the cubemap scene only the kitten (ks = 0.85) reflects; background pixels are equal.
+    let w = world("cubemap", W, H);
+    let hits = objects(&w);
+    let shadow = draw(&w, Some(Stage::Shadow));
+    let reflection = draw(&w, Some(Stage::Reflection));
+    let mut changed = 0;
+    for k in 0..hits.len() {
+        match hits[k] {
+            None => assert_eq!(shadow.pixels[k], reflection.pixels[k]),
+            Some(_) => changed += (shadow.pixels[k] != reflection.pixels[k]) as usize,
+        }
+    }
+    let kitten = hits.iter().filter(|h| h.is_some()).count();
+    assert!(
+        changed as f32 > 0.95 * kitten as f32,
+        "{changed} of {kitten}"
+    );
+}
+
+#[test]
+fn refraction_shows_the_cube_map_through_the_kitten() {
+    let w = world("refraction", W, H);
+    let hits = objects(&w);
+    let full = draw(&w, None);
+    let local = draw(&w, Some(Stage::Shadow));
+    let kitten: Vec<usize> = (0..hits.len()).filter(|&k| hits[k].is_some()).collect();
+    let mean = |img: &Image| {
+        kitten
+            .iter()
+            .map(|&k| luminance(img.pixels[k]))
+            .sum::<f32>()
+            / kitten.len() as f32
+    };
+    // Locally the glass has only a 0.1 highlight; what is seen is mostly the cube map behind.
+    assert!(
+        mean(&full) > 4.0 * mean(&local),
+        "{} vs {}",
+        mean(&full),
+        mean(&local)
+    );
+    // The transmitted image varies (it is the environment, not a flat colour).
+    let lum: Vec<f32> = kitten.iter().map(|&k| luminance(full.pixels[k])).collect();
+    let (lo, hi) = lum
+        .iter()
+        .fold((f32::MAX, 0f32), |(a, b), &l| (a.min(l), b.max(l)));
+    assert!(hi - lo > 0.2, "{lo}..{hi}");
+}
+
+#[test]
+fn vertex_colours_and_texture_vary_over_the_kitten() {
+    for name in ["vertex_color", "texture"] {
+        let w = world(name, W, H);
+        let hits = objects(&w);
+        let img = draw(&w, Some(Stage::Diffuse));
+        // Chromaticity (colour without brightness) spreads widely across the kitten.
+        let chroma: Vec<Vec3> = (0..hits.len())
+            .filter(|&k| hits[k] == Some(0))
+            .map(|k| img.pixels[k] / img.pixels[k].element_sum().max(1e-6))
+            .collect();
+        let spread = chroma
+            .iter()
+            .map(|c| (*c - chroma[0]).length())
+            .fold(0f32, f32::max);
+        assert!(spread > 0.2, "{name}: {spread}");
+        let phong = draw(&world("phong", W, H), Some(Stage::Diffuse));
+        assert_ne!(img, phong);
+    }
+}
+
+#[test]
+fn depth_zero_means_no_secondary_rays() {
+    let w = world("refraction", 32, 24);
+    let mut s = settings(None);
+    s.depth = Some(0);
+    let (_, stats) = render(&w, &s, &|_| {});
+    use std::sync::atomic::Ordering::Relaxed;
+    assert_eq!(
+        stats.rays.reflection.load(Relaxed) + stats.rays.refraction.load(Relaxed),
+        0
+    );
+    s.depth = Some(2);
+    let (_, stats) = render(&w, &s, &|_| {});
+    assert!(stats.rays.refraction.load(Relaxed) > 0);
+}
