@@ -21,11 +21,13 @@ pub mod error;
 pub mod image;
 pub mod io;
 pub mod mesh;
+pub mod packet;
 pub mod ray;
 pub mod render;
 pub mod scene;
 pub mod scenes;
 pub mod shade;
+pub mod simd;
 pub mod texture;
 
 pub use error::{Error, Result};

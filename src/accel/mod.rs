@@ -1,8 +1,10 @@
 //! Acceleration: an obvhs BVH2 flattened into compact nodes, and the triangles in BVH order.
 
+pub mod packet;
 pub mod scalar;
 pub mod tri_soa;
 
+pub use packet::{intersect8, occluded8};
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
 

@@ -62,12 +62,61 @@ pub fn hit_triangle1(
     let b0 = dot(cross(b, c), n) * inv;
     let b1 = dot(cross(c, a), n) * inv;
     let b2 = dot(cross(a, b), n) * inv;
-    // inside when no coordinate is negative (NaN fails >= and so misses).
-    if b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0 {
-        Some((t, b1, b2))
-    } else {
-        None
+    // inside when no coordinate is negative (NaN fails >= and so misses). Clear cases are
+    // decided here; within BARY_SAFE of an edge the f32 areas are rounding noise, so the
+    // edge signs are decided exactly-enough in f64 (the same call in the packet kernel).
+    // The noise grows as the ray grazes the plane (q slides along it): the margin is
+    // BARY_SAFE / |cos(d, n)|.
+    let dlen = dot(d, d).sqrt();
+    let s = BARY_SAFE * (dlen * tri.n_len[i] / dn.abs());
+    if b0 >= s && b1 >= s && b2 >= s {
+        return Some((t, b1, b2));
     }
+    if b0 < -s || b1 < -s || b2 < -s || !(b0 >= -s && b1 >= -s && b2 >= -s) {
+        return None;
+    }
+    inside_f64(accel, i, o, d).then_some((t, b1, b2))
+}
+
+/// Barycentrics this close to 0 (or closer) are decided by [`inside_f64`]. The f32 areas
+/// carry noise of about `ulp(|q|) / height`, far below this for any sane mesh.
+pub const BARY_SAFE: f32 = 1e-3;
+
+/// Whether the ray passes through the triangle, from the signs of the three edge functions
+/// `<d, cross(vi - o, vj - o)>` (each the signed sub-triangle area times `<d, n>`) in f64.
+/// A shared edge gives exactly opposite values in its two triangles, and f64 resolves rays
+/// aimed at a vertex of f32 meshes, so closed meshes do not leak at edges and vertices.
+pub fn inside_f64(accel: &Accel, i: usize, o: [f32; 3], d: [f32; 3]) -> bool {
+    let tri = &accel.tris;
+    let f = |v: [f32; 3]| {
+        [
+            v[0] as f64 - o[0] as f64,
+            v[1] as f64 - o[1] as f64,
+            v[2] as f64 - o[2] as f64,
+        ]
+    };
+    let (a, b, c) = (f(tri.v0(i)), f(tri.v1(i)), f(tri.v2(i)));
+    let d = d.map(f64::from);
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let e0 = dot(d, cross(b, c));
+    let e1 = dot(d, cross(c, a));
+    let e2 = dot(d, cross(a, b));
+    // A ray through a vertex makes two edge functions exactly 0 in exact arithmetic, but f64
+    // rounding can give them either sign, and a fan whose spokes all round the same way
+    // would leak. Values within f64 noise of 0 (1e-13 of |d| |vi - o| |vj - o|) count as 0
+    // on both sides: such a ray may hit two neighbours (fine), never none.
+    let len = |v: [f64; 3]| dot(v, v).sqrt();
+    let (ld, la, lb, lc) = (len(d), len(a), len(b), len(c));
+    let tol = |x: f64, y: f64| 1e-13 * ld * x * y;
+    let (t0, t1, t2) = (tol(lb, lc), tol(lc, la), tol(la, lb));
+    (e0 >= -t0 && e1 >= -t1 && e2 >= -t2) || (e0 <= t0 && e1 <= t1 && e2 <= t2)
 }
 
 /// Slab test: the entry distance when the ray meets the box within `[tnear, tfar]`, else `None`.

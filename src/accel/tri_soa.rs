@@ -13,6 +13,8 @@ pub struct TriangleSoa {
     pub v2: [Vec<f32>; 3],
     pub n: [Vec<f32>; 3],
     pub inv_nn: Vec<f32>,
+    /// `|n|`, to scale the barycentric safety margin by how grazing a ray is.
+    pub n_len: Vec<f32>,
     pub prim: Vec<u32>,
 }
 
@@ -31,6 +33,7 @@ impl TriangleSoa {
             }
         }
         s.inv_nn.reserve_exact(len);
+        s.n_len.reserve_exact(len);
         s.prim.reserve_exact(len);
         for &p in order {
             let [a, b, c] = tris[p as usize];
@@ -48,6 +51,7 @@ impl TriangleSoa {
                 s.n[k].push(n[k]);
             }
             s.inv_nn.push(inv);
+            s.n_len.push(n.length());
             s.prim.push(p);
         }
         s

@@ -1,0 +1,236 @@
+//! Packet traversal: 8 rays through the BVH together, the assignment's test in SIMD lanes.
+//!
+//! `intersect8` / `occluded8` are the 8-wide twins of `intersect1` / `occluded1`: same steps,
+//! same arithmetic per lane (so each lane equals the scalar result bit for bit), plus an
+//! `active` mask: inactive and padding lanes never produce hits.
+
+use super::scalar::{BARY_SAFE, inside_f64};
+use super::{Accel, SLAB_FAR_SCALE, safe_inv};
+use crate::packet::{HitPacket8, RayPacket8};
+use crate::ray::Hit;
+use crate::simd::{self, F32x8, M32x8, U32x8, Vec3x8};
+
+/// The plane + barycentric test of SoA slot `i` against 8 rays. Returns the lanes that hit
+/// with `tnear < t < tfar` and their `(t, b1, b2)`. Steps as in `hit_triangle1`:
+#[inline(always)]
+pub fn hit_triangle8(
+    accel: &Accel,
+    i: usize,
+    rays: &RayPacket8,
+    tfar: F32x8,
+    active: M32x8,
+    cull: bool,
+) -> (M32x8, F32x8, F32x8, F32x8) {
+    let tri = &accel.tris;
+    let n = Vec3x8::splat(tri.n(i));
+    let v0 = Vec3x8::splat(tri.v0(i));
+    // plane hit: t = <v0 - p, n> / <d, n> (in-plane rays and zero-area triangles give
+    // inf or NaN and fail the depth test).
+    let dn = rays.d.dot(n);
+    let mut mask = active;
+    // culling: skip back faces (<d, n> >= 0).
+    if cull {
+        mask = simd::and_not(mask, simd::ge(dn, simd::splat(0.0)));
+        if simd::none(mask) {
+            return (mask, dn, dn, dn);
+        }
+    }
+    let t = (v0 - rays.o).dot(n) / dn;
+    // depth test: NaN fails both comparisons and so misses.
+    mask = mask & simd::gt(t, rays.tnear) & simd::lt(t, tfar);
+    if simd::none(mask) {
+        return (mask, t, t, t);
+    }
+    // barycentric: signed sub-triangle areas over the whole, inside when none is negative.
+    let q = rays.o + rays.d * t;
+    let a = v0 - q;
+    let b = Vec3x8::splat(tri.v1(i)) - q;
+    let c = Vec3x8::splat(tri.v2(i)) - q;
+    let inv = simd::splat(tri.inv_nn[i]);
+    let b0 = b.cross(c).dot(n) * inv;
+    let b1 = c.cross(a).dot(n) * inv;
+    let b2 = a.cross(b).dot(n) * inv;
+    // inside when no coordinate is negative: clear lanes here, lanes within BARY_SAFE of an
+    // edge by the f64 edge signs, exactly as hit_triangle1 does.
+    let dlen = simd::sqrt(rays.d.dot(rays.d));
+    let s = simd::splat(BARY_SAFE) * (dlen * simd::splat(tri.n_len[i]) / dn.abs());
+    let ns = -s;
+    let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
+    let near = simd::ge(b0, ns) & simd::ge(b1, ns) & simd::ge(b2, ns);
+    let unsure = simd::and_not(mask & near, sure);
+    let mut hit = mask & sure;
+    if simd::any(unsure) {
+        let bits = simd::bitmask(unsure);
+        let mut resolved = 0;
+        for lane in 0..simd::LANES {
+            if bits >> lane & 1 == 1 && inside_f64(accel, i, rays.o.lane(lane), rays.d.lane(lane)) {
+                resolved |= 1 << lane;
+            }
+        }
+        hit |= simd::mask_from_bits(resolved);
+    }
+    (hit, t, b1, b2)
+}
+
+/// Packet slab test: lanes of `active` whose ray meets the box within `[tnear, tfar]`, and
+/// their entry distances.
+#[inline(always)]
+fn hit_box8(
+    node: &super::Node,
+    o: &Vec3x8,
+    inv: &Vec3x8,
+    tnear: F32x8,
+    tfar: F32x8,
+    active: M32x8,
+) -> (M32x8, F32x8) {
+    let t0x = (simd::splat(node.min[0]) - o.x) * inv.x;
+    let t1x = (simd::splat(node.max[0]) - o.x) * inv.x;
+    let t0y = (simd::splat(node.min[1]) - o.y) * inv.y;
+    let t1y = (simd::splat(node.max[1]) - o.y) * inv.y;
+    let t0z = (simd::splat(node.min[2]) - o.z) * inv.z;
+    let t1z = (simd::splat(node.max[2]) - o.z) * inv.z;
+    let lo = simd::max(
+        simd::max(simd::min(t0x, t1x), simd::min(t0y, t1y)),
+        simd::max(simd::min(t0z, t1z), tnear),
+    );
+    let hi = simd::min(
+        simd::min(simd::max(t0x, t1x), simd::max(t0y, t1y)),
+        simd::min(simd::max(t0z, t1z), tfar),
+    );
+    (active & simd::le(lo, hi * simd::splat(SLAB_FAR_SCALE)), lo)
+}
+
+/// One traversal for closest hit and any hit (`ANY_HIT`: a lane retires at its first hit and
+/// the walk stops when no lane is left).
+#[inline(always)]
+fn traverse8<const ANY_HIT: bool>(
+    accel: &Accel,
+    rays: &RayPacket8,
+    mut active: M32x8,
+    cull: bool,
+) -> (HitPacket8, M32x8) {
+    let mut hits = HitPacket8::none();
+    let mut occluded = simd::splat(0.0);
+    if accel.nodes.is_empty() || simd::none(active) {
+        return (hits, occluded);
+    }
+    let d = rays.d;
+    let inv = Vec3x8::new(
+        simd::from_lanes(simd::lanes(d.x).map(safe_inv)),
+        simd::from_lanes(simd::lanes(d.y).map(safe_inv)),
+        simd::from_lanes(simd::lanes(d.z).map(safe_inv)),
+    );
+    let mut tfar = rays.tfar;
+    let mut stack: super::scalar::Stack<u32, 64> = super::scalar::Stack::new();
+    let mut node = 0u32;
+    // The root must be hit by some lane.
+    let (m, _) = hit_box8(&accel.nodes[0], &rays.o, &inv, rays.tnear, tfar, active);
+    if simd::none(m) {
+        return (hits, occluded);
+    }
+    loop {
+        let n = accel.nodes[node as usize];
+        if n.count > 0 {
+            for slot in n.first..n.first + n.count {
+                let slot = slot as usize;
+                let (mask, t, b1, b2) = hit_triangle8(accel, slot, rays, tfar, active, cull);
+                if simd::none(mask) {
+                    continue;
+                }
+                if ANY_HIT {
+                    occluded |= mask;
+                    active = simd::and_not(active, mask);
+                    if simd::none(active) {
+                        return (hits, occluded);
+                    }
+                    continue;
+                }
+                // record hit: as in intersect1, the new limit is the next float above t and
+                // an exact tie keeps the lower original triangle index.
+                let id = U32x8::splat(accel.tris.prim[slot]);
+                let better = simd::lt(t, hits.t) | simd::lt_u32(id, hits.tri);
+                let take = mask & better;
+                hits.tri = simd::select_u32(take, id, hits.tri);
+                hits.t = simd::select(take, t, hits.t);
+                hits.b1 = simd::select(take, b1, hits.b1);
+                hits.b2 = simd::select(take, b2, hits.b2);
+                let next_up = simd::from_lanes(simd::lanes(t).map(f32::next_up));
+                tfar = simd::select(take, next_up, tfar);
+            }
+        } else {
+            // ordered children: both boxes tested, the side nearer for most lanes first.
+            let (l, r) = (n.first, n.first + 1);
+            let (ml, tl) = hit_box8(
+                &accel.nodes[l as usize],
+                &rays.o,
+                &inv,
+                rays.tnear,
+                tfar,
+                active,
+            );
+            let (mr, tr) = hit_box8(
+                &accel.nodes[r as usize],
+                &rays.o,
+                &inv,
+                rays.tnear,
+                tfar,
+                active,
+            );
+            match (simd::any(ml), simd::any(mr)) {
+                (true, true) => {
+                    let both = ml & mr;
+                    let left_first = simd::bitmask(both & simd::le(tl, tr)).count_ones() * 2
+                        >= simd::bitmask(both).count_ones();
+                    let (near, far) = if left_first { (l, r) } else { (r, l) };
+                    stack.push(far);
+                    node = near;
+                    continue;
+                }
+                (true, false) => {
+                    node = l;
+                    continue;
+                }
+                (false, true) => {
+                    node = r;
+                    continue;
+                }
+                (false, false) => {}
+            }
+        }
+        // pop the next node some lane still reaches before its closest hit.
+        loop {
+            match stack.pop() {
+                None => return (hits, occluded),
+                Some(next) => {
+                    let (m, _) = hit_box8(
+                        &accel.nodes[next as usize],
+                        &rays.o,
+                        &inv,
+                        rays.tnear,
+                        tfar,
+                        active,
+                    );
+                    if simd::any(m) {
+                        node = next;
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Closest hits of the `active` lanes (others report no hit).
+pub fn intersect8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
+    traverse8::<false>(accel, rays, active, cull).0
+}
+
+/// Lanes of `active` whose ray hits anything with `tnear < t < tfar`.
+pub fn occluded8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> M32x8 {
+    traverse8::<true>(accel, rays, active, cull).1
+}
+
+/// Hit of lane `i` as the scalar API reports it (for tests and tools).
+pub fn lane_hit(h: &HitPacket8, i: usize) -> Option<Hit> {
+    h.lane(i)
+}

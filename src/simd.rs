@@ -1,0 +1,239 @@
+//! The only module that names `wide`: 8-lane f32 / u32 vectors, masks, `Vec3x8`, helpers.
+//!
+//! Built with AVX2 (see `.cargo/config.toml`), `F32x8` is one 256-bit register. Masks are
+//! `F32x8` lanes of all ones (true) or all zeros (false), as the comparisons return them.
+//! Only exact IEEE operations (+ - * / sqrt, comparisons) are used by the kernels, never
+//! fused multiply-add, so each lane computes exactly what the scalar twin computes.
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+pub use wide::f32x8 as F32x8;
+pub use wide::u32x8 as U32x8;
+
+/// A lane mask: all-ones lanes are true.
+pub type M32x8 = F32x8;
+
+pub const LANES: usize = 8;
+
+#[inline(always)]
+pub fn splat(v: f32) -> F32x8 {
+    F32x8::splat(v)
+}
+#[inline(always)]
+pub fn lanes(v: F32x8) -> [f32; 8] {
+    v.to_array()
+}
+#[inline(always)]
+pub fn from_lanes(a: [f32; 8]) -> F32x8 {
+    F32x8::from(a)
+}
+#[inline(always)]
+pub fn lt(a: F32x8, b: F32x8) -> M32x8 {
+    a.simd_lt(b)
+}
+#[inline(always)]
+pub fn le(a: F32x8, b: F32x8) -> M32x8 {
+    a.simd_le(b)
+}
+#[inline(always)]
+pub fn gt(a: F32x8, b: F32x8) -> M32x8 {
+    a.simd_gt(b)
+}
+#[inline(always)]
+pub fn ge(a: F32x8, b: F32x8) -> M32x8 {
+    a.simd_ge(b)
+}
+#[inline(always)]
+pub fn eq(a: F32x8, b: F32x8) -> M32x8 {
+    a.simd_eq(b)
+}
+/// `m ? a : b` per lane.
+#[inline(always)]
+pub fn select(m: M32x8, a: F32x8, b: F32x8) -> F32x8 {
+    m.select(a, b)
+}
+/// `m ? a : b` per lane, for u32 lanes.
+#[inline(always)]
+pub fn select_u32(m: M32x8, a: U32x8, b: U32x8) -> U32x8 {
+    let mi: U32x8 = wide::bytemuck::cast(m);
+    (a & mi) | (b & !mi)
+}
+/// `a < b` on u32 lanes, as a float mask.
+#[inline(always)]
+pub fn lt_u32(a: U32x8, b: U32x8) -> M32x8 {
+    wide::bytemuck::cast(a.simd_lt(b))
+}
+#[inline(always)]
+pub fn any(m: M32x8) -> bool {
+    m.any()
+}
+#[inline(always)]
+pub fn none(m: M32x8) -> bool {
+    !m.any()
+}
+#[inline(always)]
+pub fn bitmask(m: M32x8) -> u32 {
+    m.to_bitmask()
+}
+/// `a & !b`.
+#[inline(always)]
+pub fn and_not(a: M32x8, b: M32x8) -> M32x8 {
+    a & !b
+}
+/// A mask from the low 8 bits of `bits` (bit `i` = lane `i`).
+#[inline(always)]
+pub fn mask_from_bits(bits: u32) -> M32x8 {
+    let on = f32::from_bits(u32::MAX);
+    from_lanes(std::array::from_fn(|i| {
+        if bits >> i & 1 == 1 { on } else { 0.0 }
+    }))
+}
+/// Whether lane `i` of a mask is set.
+#[inline(always)]
+pub fn lane_set(m: M32x8, i: usize) -> bool {
+    bitmask(m) >> i & 1 == 1
+}
+#[inline(always)]
+pub fn min(a: F32x8, b: F32x8) -> F32x8 {
+    a.fast_min(b)
+}
+#[inline(always)]
+pub fn max(a: F32x8, b: F32x8) -> F32x8 {
+    a.fast_max(b)
+}
+#[inline(always)]
+pub fn sqrt(a: F32x8) -> F32x8 {
+    a.sqrt()
+}
+#[inline(always)]
+pub fn u32_lanes(v: U32x8) -> [u32; 8] {
+    v.to_array()
+}
+#[inline(always)]
+pub fn u32_from_lanes(a: [u32; 8]) -> U32x8 {
+    U32x8::from(a)
+}
+
+/// Eight 3-vectors in SoA form.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vec3x8 {
+    pub x: F32x8,
+    pub y: F32x8,
+    pub z: F32x8,
+}
+
+impl Vec3x8 {
+    #[inline(always)]
+    pub fn new(x: F32x8, y: F32x8, z: F32x8) -> Self {
+        Vec3x8 { x, y, z }
+    }
+    #[inline(always)]
+    pub fn splat(v: [f32; 3]) -> Self {
+        Vec3x8::new(splat(v[0]), splat(v[1]), splat(v[2]))
+    }
+    /// `x*x' + y*y' + z*z'`, summed left to right like the scalar kernels.
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> F32x8 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        Vec3x8::new(
+            self.y * o.z - self.z * o.y,
+            self.z * o.x - self.x * o.z,
+            self.x * o.y - self.y * o.x,
+        )
+    }
+    #[inline(always)]
+    pub fn scale(self, s: F32x8) -> Self {
+        Vec3x8::new(self.x * s, self.y * s, self.z * s)
+    }
+    #[inline(always)]
+    pub fn select(m: M32x8, a: Self, b: Self) -> Self {
+        Vec3x8::new(
+            select(m, a.x, b.x),
+            select(m, a.y, b.y),
+            select(m, a.z, b.z),
+        )
+    }
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> [f32; 3] {
+        [lanes(self.x)[i], lanes(self.y)[i], lanes(self.z)[i]]
+    }
+    pub fn from_fn(f: impl Fn(usize) -> [f32; 3]) -> Self {
+        let v: [[f32; 3]; 8] = std::array::from_fn(f);
+        Vec3x8::new(
+            from_lanes(v.map(|p| p[0])),
+            from_lanes(v.map(|p| p[1])),
+            from_lanes(v.map(|p| p[2])),
+        )
+    }
+}
+
+impl Add for Vec3x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Vec3x8::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl Sub for Vec3x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Vec3x8::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl Mul<F32x8> for Vec3x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: F32x8) -> Self {
+        self.scale(s)
+    }
+}
+impl Neg for Vec3x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Vec3x8::new(-self.x, -self.y, -self.z)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn masks_and_selects() {
+        let a = from_lanes([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, f32::NAN]);
+        let m = lt(a, splat(3.0));
+        assert_eq!(bitmask(m), 0b0000_0111, "NaN lanes compare false");
+        assert_eq!(
+            lanes(select(m, splat(1.0), splat(-1.0)))[..4],
+            [1.0, 1.0, 1.0, -1.0]
+        );
+        assert_eq!(bitmask(mask_from_bits(0b1010_0101)), 0b1010_0101);
+        assert!(lane_set(m, 2) && !lane_set(m, 3));
+        assert!(any(m) && !none(m) && none(and_not(m, m)));
+        let ids = select_u32(m, U32x8::splat(7), U32x8::splat(9));
+        assert_eq!(u32_lanes(ids), [7, 7, 7, 9, 9, 9, 9, 9]);
+        assert_eq!(
+            bitmask(lt_u32(
+                u32_from_lanes([0, 5, u32::MAX, 3, 0, 0, 0, 0]),
+                U32x8::splat(4)
+            )),
+            0b1111_1001
+        );
+    }
+
+    #[test]
+    fn vec3_ops_match_scalar_order() {
+        let a = Vec3x8::from_fn(|i| [i as f32, 0.1, -2.0]);
+        let b = Vec3x8::splat([0.3, 0.7, 1e-3]);
+        for i in 0..8 {
+            let (p, q) = (a.lane(i), b.lane(i));
+            assert_eq!(lanes(a.dot(b))[i], p[0] * q[0] + p[1] * q[1] + p[2] * q[2]);
+            assert_eq!(a.cross(b).lane(i)[1], p[2] * q[0] - p[0] * q[2]);
+        }
+    }
+}

@@ -1,0 +1,300 @@
+//! The packet engine held to the scalar reference, the scalar kernel held to the literal
+//! f64 formula of SCENES.md §2, and the BVH held to brute force.
+//!
+//! Input ranges: triangle vertices in [-4, 4]^3 (plus exact degenerate cases), ray origins in
+//! [-8, 8]^3, directions from [-1, 1]^3 (not normalised, sometimes with exact zeros, NaN or
+//! inf), tnear in [0, 1), tfar in (0, inf]. Packets are partly active at random.
+
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use glam::Vec3;
+use proptest::prelude::*;
+use whitted::accel::scalar::{intersect_brute1, literal_hit};
+use whitted::accel::{Accel, BuildQuality, intersect1, intersect8, occluded1, occluded8};
+use whitted::io::load_mesh;
+use whitted::packet::RayPacket8;
+use whitted::ray::{Hit, Ray};
+use whitted::simd;
+
+fn coord() -> impl Strategy<Value = f32> + Clone {
+    prop_oneof![4 => -4.0f32..4.0, 1 => (-4i32..=4).prop_map(|i| i as f32)]
+}
+
+fn vec3(s: impl Strategy<Value = f32> + Clone) -> impl Strategy<Value = Vec3> {
+    (s.clone(), s.clone(), s).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+}
+
+fn triangle() -> impl Strategy<Value = [Vec3; 3]> {
+    prop_oneof![
+        8 => [vec3(coord()), vec3(coord()), vec3(coord())],
+        // zero-area: a repeated vertex, or three collinear points
+        1 => (vec3(coord()), vec3(coord())).prop_map(|(a, b)| [a, b, a]),
+        1 => (vec3(coord()), vec3(coord())).prop_map(|(a, b)| [a, b, (a + b) * 0.5]),
+    ]
+}
+
+fn direction() -> impl Strategy<Value = Vec3> {
+    prop_oneof![
+        12 => vec3(-1.0f32..1.0),
+        2 => vec3(prop_oneof![Just(0.0f32), Just(1.0), Just(-1.0), -1.0f32..1.0]),
+        1 => vec3(prop_oneof![Just(f32::NAN), Just(f32::INFINITY), -1.0f32..1.0]),
+    ]
+}
+
+fn tfar() -> impl Strategy<Value = f32> {
+    prop_oneof![3 => Just(f32::INFINITY), 1 => 0.01f32..20.0]
+}
+
+/// Rays aimed at random points of random triangles: vertices, edge points, interiors.
+fn aimed_rays(tris: Vec<[Vec3; 3]>) -> impl Strategy<Value = (Vec<[Vec3; 3]>, Vec<Ray>)> {
+    let n = tris.len();
+    let ray = (
+        0..n,
+        0u8..4,
+        0.0f32..1.0,
+        0.0f32..1.0,
+        vec3(-8.0f32..8.0),
+        tfar(),
+        0.0f32..0.5,
+        direction(),
+        0u8..5,
+    )
+        .prop_map(
+            move |(t, kind, s, u, origin, tfar, tnear, free_dir, free)| {
+                (t, kind, s, u, origin, tfar, tnear, free_dir, free)
+            },
+        );
+    (Just(tris.clone()), prop::collection::vec(ray, 1..40)).prop_map(move |(tris, specs)| {
+        let rays = specs
+            .into_iter()
+            .map(|(t, kind, s, u, origin, tfar, tnear, free_dir, free)| {
+                let [a, b, c] = tris[t];
+                let target = match kind {
+                    0 => [a, b, c][(s * 2.99) as usize],
+                    1 => a + (b - a) * s,
+                    2 => b + (c - b) * s,
+                    _ => a + (b - a) * s * (1.0 - u) + (c - a) * u * (1.0 - s),
+                };
+                let dir = if free == 0 { free_dir } else { target - origin };
+                Ray::new(origin, dir, tnear, tfar)
+            })
+            .collect();
+        (tris, rays)
+    })
+}
+
+fn scene() -> impl Strategy<Value = (Vec<[Vec3; 3]>, Vec<Ray>)> {
+    prop::collection::vec(triangle(), 1..60).prop_flat_map(aimed_rays)
+}
+
+/// Trace `rays` in packets of 8 with a random activity pattern per packet and compare every
+/// lane with the scalar twins.
+fn check_packets(
+    accel: &Accel,
+    rays: &[Ray],
+    masks: &[u8],
+    cull: bool,
+) -> Result<(), TestCaseError> {
+    for (k, chunk) in rays.chunks(8).enumerate() {
+        let bits = masks[k % masks.len()] as u32;
+        let (packet, active) = RayPacket8::from_fn(|i| chunk.get(i).copied());
+        let active = active & simd::mask_from_bits(bits);
+        let hits = intersect8(accel, &packet, active, cull);
+        let occ = occluded8(accel, &packet, active, cull);
+        for i in 0..8 {
+            let lane_active = simd::lane_set(active, i);
+            if !lane_active {
+                // Inactive and padding lanes never produce hits.
+                prop_assert_eq!(hits.lane(i), None);
+                prop_assert!(!simd::lane_set(occ, i));
+                continue;
+            }
+            let ray = chunk[i];
+            let scalar = intersect1(accel, &ray, cull);
+            // Bit for bit: triangle, t and barycentrics (compared as bits so NaN-free equality is exact).
+            let bits_of =
+                |h: Option<Hit>| h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()));
+            prop_assert_eq!(
+                bits_of(hits.lane(i)),
+                bits_of(scalar),
+                "lane {} ray {:?}",
+                i,
+                ray
+            );
+            // BVH traversal equals brute force.
+            prop_assert_eq!(
+                bits_of(scalar),
+                bits_of(intersect_brute1(accel, &ray, cull))
+            );
+            // occluded8 == "the closest hit is nearer than tfar" == occluded1.
+            prop_assert_eq!(simd::lane_set(occ, i), scalar.is_some());
+            prop_assert_eq!(occluded1(accel, &ray, cull), scalar.is_some());
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    /// Packet == scalar == brute force on random triangle soups, culled and not.
+    #[test]
+    fn packet_equals_scalar_equals_brute_force((tris, rays) in scene(), masks in prop::collection::vec(any::<u8>(), 1..4), cull in any::<bool>()) {
+        let accel = Accel::build(&tris, BuildQuality::Medium);
+        check_packets(&accel, &rays, &masks, cull)?;
+    }
+
+    /// The scalar kernel agrees with the literal f64 formula: same hit / miss wherever the
+    /// f64 barycentrics are clear of the edges by 1e-3 and the ray is not grazing (|cos| >= 0.05), with t
+    /// within 1e-4 relative.
+    #[test]
+    fn scalar_kernel_matches_literal_formula(tri in triangle(), origin in vec3(-8.0f32..8.0), dir in vec3(-1.0f32..1.0), cull in any::<bool>(), s in 0.0f32..1.0, u in 0.0f32..1.0, aim in any::<bool>()) {
+        let [a, b, c] = tri;
+        // Nearly collinear vertices: the f32 cross product is rounding noise, no kernel in
+        // f32 can agree with f64 there (such triangles are "degenerate" at f32 precision).
+        let n32 = (b - a).cross(c - a);
+        prop_assume!(n32.length() > 1e-4 * (b - a).length() * (c - a).length());
+        let dir = if aim { a + (b - a) * s + (c - a) * u - origin } else { dir };
+        let accel = Accel::build(&[tri], BuildQuality::Medium);
+        let ray = Ray::new(origin, dir, 0.0, f32::INFINITY);
+        let f32_hit = intersect1(&accel, &ray, cull);
+        let v = tri.map(|p| p.to_array().map(f64::from));
+        let o = origin.to_array().map(f64::from);
+        let d = dir.to_array().map(f64::from);
+        let lit = literal_hit(v, o, d, 0.0, f64::INFINITY, cull);
+        let n = (b - a).cross(c - a);
+        let grazing = n.length_squared() == 0.0 || (dir.normalize_or_zero().dot(n.normalize_or_zero())).abs() < 0.05;
+        match (f32_hit, lit) {
+            (Some(h), Some((t, b1, b2))) => {
+                prop_assert!((h.t as f64 - t).abs() <= 1e-4 * t.abs().max(1e-3), "t {} vs {}", h.t, t);
+                prop_assert!((h.b1 as f64 - b1).abs() < 1e-3 && (h.b2 as f64 - b2).abs() < 1e-3);
+            }
+            (Some(h), None) => {
+                // Only allowed on the boundary or for grazing rays.
+                let b0 = 1.0 - h.b1 - h.b2;
+                prop_assert!(grazing || h.b1.min(h.b2).min(b0) < 1e-3, "f32 hit {:?}, f64 miss", h);
+            }
+            (None, Some((_, b1, b2))) => {
+                prop_assert!(grazing || b1.min(b2).min(1.0 - b1 - b2) < 1e-3, "f64 hit ({} {}), f32 miss", b1, b2);
+            }
+            (None, None) => {}
+        }
+    }
+}
+
+/// A sphere-like closed mesh (the subdivided tetrahedron) with rays aimed at every vertex and
+/// edge point from random origins: packets equal scalar.
+#[test]
+fn packet_equals_scalar_on_closed_meshes_at_vertices_and_edges() {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes");
+    for name in ["tetrahedron.m", "prism.m", "cube.obj"] {
+        let (mesh, _) = load_mesh(&dir.join(name)).unwrap();
+        let mesh = mesh.subdivide(2);
+        let tris: Vec<[Vec3; 3]> = mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| mesh.positions[i as usize]))
+            .collect();
+        let accel = Accel::build(&tris, BuildQuality::Medium);
+        let mut rays = Vec::new();
+        for (k, p) in mesh.positions.iter().enumerate() {
+            let origin = Vec3::new(
+                (k as f32 * 0.7).sin() * 5.0,
+                (k as f32 * 1.3).cos() * 5.0,
+                3.0,
+            );
+            rays.push(Ray::new(origin, *p - origin, 0.0, f32::INFINITY));
+        }
+        for cull in [false, true] {
+            check_packets(&accel, &rays, &[0xFF, 0b1011_0110], cull).unwrap();
+        }
+    }
+}
+
+/// Rays from inside closed meshes aimed at every vertex and at points on every edge must hit
+/// something (no culling): the leak count is 0. A double hit on an edge is fine.
+fn leaks(tris: &[[Vec3; 3]], origins: &[Vec3], targets: &[Vec3]) -> (usize, usize) {
+    let accel = Accel::build(tris, BuildQuality::Medium);
+    let mut rays = Vec::new();
+    for o in origins {
+        for t in targets {
+            rays.push(Ray::new(*o, *t - *o, 0.0, f32::INFINITY));
+        }
+    }
+    let mut leaked = 0;
+    for chunk in rays.chunks(8) {
+        let (packet, active) = RayPacket8::from_fn(|i| chunk.get(i).copied());
+        let hits = intersect8(&accel, &packet, active, false);
+        for i in 0..chunk.len() {
+            let scalar = intersect1(&accel, &chunk[i], false);
+            if hits.lane(i).is_none() || scalar.is_none() {
+                let brute = whitted::accel::scalar::intersect_brute1(&accel, &chunk[i], false);
+                eprintln!("leak: {:?} brute {:?}", chunk[i], brute);
+                leaked += 1;
+            }
+        }
+    }
+    (leaked, rays.len())
+}
+
+fn edge_targets(mesh: &whitted::mesh::Mesh) -> Vec<Vec3> {
+    let mut targets = mesh.positions.clone();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (
+                mesh.positions[t[k] as usize],
+                mesh.positions[t[(k + 1) % 3] as usize],
+            );
+            for s in [0.5f32, 0.25, 1.0 / 3.0] {
+                targets.push(a + (b - a) * s);
+            }
+        }
+    }
+    targets
+}
+
+#[test]
+fn watertight_from_inside_the_kitten() {
+    let (mesh, _) = load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
+    let tris: Vec<[Vec3; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| mesh.positions[i as usize]))
+        .collect();
+    let origins = [
+        Vec3::new(0.0, -0.5, 0.0),
+        Vec3::new(0.05, -0.2, -0.1),
+        Vec3::new(-0.1, 0.2, -0.1),
+    ];
+    let targets = edge_targets(&mesh);
+    let (leaked, total) = leaks(&tris, &origins, &targets);
+    println!("kitten: {leaked} leaks of {total} rays");
+    assert_eq!(
+        leaked, 0,
+        "{leaked} of {total} rays escaped the closed kitten"
+    );
+}
+
+#[test]
+fn watertight_from_inside_a_needle_prism() {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes");
+    let (mesh, _) = load_mesh(&dir.join("prism.m")).unwrap();
+    let mesh = mesh.subdivide(3);
+    let tris: Vec<[Vec3; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| mesh.positions[i as usize]))
+        .collect();
+    let origins: Vec<Vec3> = (1..10)
+        .map(|k| Vec3::new(0.0002, 0.0003, k as f32 * 0.1))
+        .collect();
+    let targets = edge_targets(&mesh);
+    let (leaked, total) = leaks(&tris, &origins, &targets);
+    println!("prism: {leaked} leaks of {total} rays");
+    assert_eq!(
+        leaked, 0,
+        "{leaked} of {total} rays escaped the closed prism"
+    );
+}
