@@ -19,6 +19,7 @@ pub mod accel;
 pub mod camera;
 pub mod error;
 pub mod image;
+pub mod info;
 pub mod io;
 pub mod mesh;
 pub mod packet;

@@ -30,6 +30,13 @@ enum Command {
         /// phong, vertex_color, texture, cubemap, refraction or demo.
         name: String,
     },
+    /// Describe a mesh, scene, image or cube-map folder after validating it.
+    Info {
+        file: PathBuf,
+        /// Print one JSON object instead of `key: value` lines.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(clap::Args)]
@@ -65,6 +72,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Scene { name } => cmd_scene(&name),
+        Command::Info { file, json } => whitted::info::print(&file, json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -88,8 +96,7 @@ fn load_scene_file(arg: &str) -> Result<(SceneFile, PathBuf, Option<PathBuf>)> {
             scenes::NAMES.join(", ")
         )));
     }
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-    let file = SceneFile::parse(&text, &path)?;
+    let file = SceneFile::load(&path)?;
     let dir = path.parent().map(Path::to_path_buf);
     Ok((file, path, dir))
 }

@@ -9,19 +9,37 @@ use std::path::{Path, PathBuf};
 /// Largest texture accepted, in pixels (checked before decoding allocates).
 pub const MAX_TEXTURE_PIXELS: u64 = 1 << 26;
 
+/// What a decoded image file was: its format, size and channel layout (for `whitted info`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ImageInfo {
+    pub format: String,
+    pub width: usize,
+    pub height: usize,
+    /// Channels in the file (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; EXR: its channel count).
+    pub channels: usize,
+    /// Bits per channel sample in the file (EXR: 16 or 32).
+    pub bits: usize,
+}
+
 /// Load an image as a linear-RGB texture. 8- and 16-bit formats (PNG, JPEG, TGA, BMP) are
 /// sRGB-decoded; EXR and HDR are linear. Alpha is ignored; non-finite EXR/HDR samples become 0.
 pub fn load_texture(path: &Path) -> Result<Texture> {
+    let bytes = super::read_regular(path)?;
+    decode_texture(&bytes, path).map(|(t, _)| t)
+}
+
+/// [`load_texture`] on bytes already read; `path` names the file in messages and gives the
+/// format when the bytes do not (TGA has no signature).
+pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    if ext == "exr" {
-        return load_exr(path);
+    if bytes.starts_with(&EXR_MAGIC) || (ext == "exr" && !bytes.is_empty()) {
+        return decode_exr(bytes, path);
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let format = image::guess_format(&bytes)
+    let format = image::guess_format(bytes)
         .map_err(|_| {
             Error::image(
                 path,
@@ -29,54 +47,71 @@ pub fn load_texture(path: &Path) -> Result<Texture> {
             )
         })
         .or_else(|e| image::ImageFormat::from_path(path).map_err(|_| e))?;
-    if format == image::ImageFormat::Jpeg && !jpeg_is_complete(&bytes) {
+    if format == image::ImageFormat::Jpeg && !jpeg_is_complete(bytes) {
         return Err(Error::image(path, "truncated JPEG: no end-of-image marker"));
     }
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(&bytes), format);
-    // Keep the image crate's default memory limits and add a pixel cap of our own.
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(1 << 16);
-    limits.max_image_height = Some(1 << 16);
-    reader.limits(limits);
-    let img = reader
+    let reader = || {
+        let mut r = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+        // Keep the image crate's default memory limits and add a size cap of our own.
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(1 << 16);
+        limits.max_image_height = Some(1 << 16);
+        r.limits(limits);
+        r
+    };
+    // The header alone first: an absurd size is refused before anything is allocated.
+    let (w, h) = reader()
+        .into_dimensions()
+        .map_err(|e| Error::image(path, format!("cannot decode: {e}")))?;
+    check_texture_size(w as u64, h as u64, path)?;
+    let img = reader()
         .decode()
         .map_err(|e| Error::image(path, format!("cannot decode: {e}")))?;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    if w == 0 || h == 0 || (w as u64) * (h as u64) > MAX_TEXTURE_PIXELS {
-        return Err(Error::image(path, format!("unusable size {w}x{h}")));
-    }
-    let linear = matches!(
+    check_texture_size(w as u64, h as u64, path)?;
+    let color = img.color();
+    let info = ImageInfo {
+        format: format!("{format:?}").to_ascii_lowercase(),
+        width: w,
+        height: h,
+        channels: color.channel_count() as usize,
+        bits: (color.bits_per_pixel() / color.channel_count().max(1) as u16) as usize,
+    };
+    let texels = if matches!(
         img,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
-    );
-    let rgb = img.to_rgb32f();
-    let texels = if linear {
-        rgb.pixels()
+    ) {
+        img.to_rgb32f()
+            .pixels()
             .map(|p| Vec3::from(p.0.map(|c| if c.is_finite() { c } else { 0.0 })))
             .collect()
-    } else if matches!(
-        img.color().bits_per_pixel() / img.color().channel_count() as u16,
-        8
-    ) {
+    } else if info.bits == 8 {
         let lut: Vec<f32> = (0..256)
             .map(|v| srgb_decode(v as f64 / 255.0) as f32)
             .collect();
         img.to_rgb8()
             .pixels()
-            .map(|p| {
-                Vec3::new(
-                    lut[p.0[0] as usize],
-                    lut[p.0[1] as usize],
-                    lut[p.0[2] as usize],
-                )
-            })
+            .map(|p| p.0.map(|c| lut[c as usize]).into())
             .collect()
     } else {
-        rgb.pixels()
+        img.to_rgb32f()
+            .pixels()
             .map(|p| Vec3::from(p.0.map(|c| srgb_decode(c as f64) as f32)))
             .collect()
     };
-    Ok(Texture::new(w, h, texels))
+    Ok((Texture::new(w, h, texels), info))
+}
+
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+fn check_texture_size(w: u64, h: u64, path: &Path) -> Result<()> {
+    if w == 0 || h == 0 || w.saturating_mul(h) > MAX_TEXTURE_PIXELS {
+        return Err(Error::image(
+            path,
+            format!("unusable size {w}x{h} (the cap is {MAX_TEXTURE_PIXELS} pixels)"),
+        ));
+    }
+    Ok(())
 }
 
 /// A JPEG must reach its end-of-image marker (FF D9); trailing padding is allowed.
@@ -90,70 +125,126 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
     end >= 2 && bytes[end - 2..end] == [0xFF, 0xD9]
 }
 
-fn load_exr(path: &Path) -> Result<Texture> {
-    use exr::prelude::read_first_rgba_layer_from_file;
+fn decode_exr(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
+    use exr::prelude::{ReadChannels, ReadLayers, read};
     let bad = |e: exr::error::Error| Error::image(path, format!("cannot read EXR: {e}"));
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(bad)?;
-    let header = meta
+    let meta =
+        exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false).map_err(bad)?;
+    let first = meta
         .headers
         .first()
         .ok_or_else(|| Error::image(path, "EXR without layers"))?;
-    let size = header.layer_size;
-    if size.0 == 0 || size.1 == 0 || (size.0 as u64) * (size.1 as u64) > MAX_TEXTURE_PIXELS {
-        return Err(Error::image(
-            path,
-            format!("unusable size {}x{}", size.0, size.1),
-        ));
+    // Every layer's size is checked: the reader may pick any of them.
+    for header in &meta.headers {
+        let size = header.layer_size;
+        check_texture_size(size.0 as u64, size.1 as u64, path)?;
     }
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |res, _| Texture::new(res.0, res.1, vec![Vec3::ZERO; res.0 * res.1]),
-        |t: &mut Texture, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let clean = |c: f32| if c.is_finite() { c } else { 0.0 };
-            t.texels[pos.1 * t.width + pos.0] = Vec3::new(clean(r), clean(g), clean(b));
-        },
-    )
-    .map_err(bad)?;
-    Ok(image.layer_data.channel_data.pixels)
+    let info = ImageInfo {
+        format: "exr".into(),
+        width: first.layer_size.0,
+        height: first.layer_size.1,
+        channels: first.channels.list.len(),
+        bits: first
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() * 8)
+            .max()
+            .unwrap_or(0),
+    };
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| {
+                // The size was checked above for every layer; an empty one cannot get here.
+                Texture::new(
+                    res.0.max(1),
+                    res.1.max(1),
+                    vec![Vec3::ZERO; res.0.max(1) * res.1.max(1)],
+                )
+            },
+            |t: &mut Texture, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let clean = |c: f32| if c.is_finite() { c } else { 0.0 };
+                if let Some(px) = t.texels.get_mut(pos.1 * t.width + pos.0) {
+                    *px = Vec3::new(clean(r), clean(g), clean(b));
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(bad)?;
+    let tex = image.layer_data.channel_data.pixels;
+    let info = ImageInfo {
+        width: tex.width,
+        height: tex.height,
+        ..info
+    };
+    Ok((tex, info))
 }
 
 /// Load a cube map folder holding `posx negx posy negy posz negz` images (any supported
 /// extension). All six must exist, be square and share one size; errors name the bad face.
 pub fn load_cubemap(dir: &Path) -> Result<CubeMap> {
+    load_cubemap_info(dir).map(|(c, _)| c)
+}
+
+/// [`load_cubemap`], also returning what the `posx` face file was (all faces share its size).
+pub fn load_cubemap_info(dir: &Path) -> Result<(CubeMap, ImageInfo)> {
     if !dir.is_dir() {
         return Err(Error::image(
             dir,
             "cube map must be a folder with posx, negx, posy, negy, posz, negz images",
         ));
     }
-    let mut faces = Vec::with_capacity(6);
+    let mut files = Vec::with_capacity(6);
     for name in CUBE_FACES {
         let file = face_file(dir, name)?;
-        let tex = load_texture(&file)?;
+        let bytes = super::read_regular(&file)?;
+        files.push((file, bytes));
+    }
+    let faces: [(&Path, &[u8]); 6] =
+        std::array::from_fn(|k| (files[k].0.as_path(), files[k].1.as_slice()));
+    decode_cubemap(faces)
+}
+
+/// Decode six face files, in [`CUBE_FACES`] order, given as (name for messages, bytes), and
+/// check them: square, one size. Errors name the bad face.
+pub fn decode_cubemap(faces: [(&Path, &[u8]); 6]) -> Result<(CubeMap, ImageInfo)> {
+    let mut out: Vec<Texture> = Vec::with_capacity(6);
+    let mut first_info = None;
+    for (name, (file, bytes)) in CUBE_FACES.iter().zip(faces) {
+        let (tex, info) = decode_texture(bytes, file)?;
         if tex.width != tex.height {
             return Err(Error::image(
-                &file,
+                file,
                 format!(
                     "cube-map face {name} is not square ({}x{})",
                     tex.width, tex.height
                 ),
             ));
         }
-        if let Some(first) = faces.first().map(|f: &Texture| f.width)
+        if let Some(first) = out.first().map(|f| f.width)
             && first != tex.width
         {
             return Err(Error::image(
-                &file,
+                file,
                 format!(
                     "cube-map face {name} is {0}x{0}, posx is {first}x{first}",
                     tex.width
                 ),
             ));
         }
-        faces.push(tex);
+        first_info.get_or_insert(info);
+        out.push(tex);
     }
-    let faces: [Texture; 6] = faces.try_into().expect("six faces");
-    Ok(CubeMap { faces })
+    let faces: [Texture; 6] = out
+        .try_into()
+        .map_err(|_| Error::image(Path::new("cube map"), "needs six faces"))?;
+    let info = first_info.ok_or_else(|| Error::image(Path::new("cube map"), "no faces"))?;
+    Ok((CubeMap { faces }, info))
 }
 
 fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
@@ -199,7 +290,8 @@ pub fn save_image(image: &Image, path: &Path) -> Result<()> {
 
 /// Read a linear RGB EXR back (for tests and comparisons).
 pub fn load_exr_image(path: &Path) -> Result<Image> {
-    let t = load_exr(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let (t, _) = decode_exr(&bytes, path)?;
     Ok(Image {
         width: t.width,
         height: t.height,

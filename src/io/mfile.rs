@@ -23,12 +23,17 @@ struct VertexAttrs {
 
 /// Read and parse a `.m` file. Warnings (degenerate faces, ...) are returned beside the mesh.
 pub fn load_m(path: &Path) -> Result<(Mesh, Vec<String>)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = super::read_regular(path)?;
     parse_m(&bytes, path)
 }
 
 /// Parse `.m` text; `path` is only used in messages.
 pub fn parse_m(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
+    parse_m_detail(bytes, path).map(|(m, w, _)| (m, w))
+}
+
+/// [`parse_m`], also telling whether the file gave vertex normals (otherwise they were computed).
+pub fn parse_m_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let err = |line: usize, msg: String| Error::parse(path, line, msg);
 
@@ -144,6 +149,7 @@ pub fn parse_m(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
     } else {
         None
     };
+    let file_normals = normals.is_some();
     let uvs = all_or_none(&attrs, |a| a.uv, "uv", path)?;
     let colors = all_or_none(&attrs, |a| a.rgb, "rgb", path)?;
     let mut mesh = Mesh {
@@ -161,7 +167,7 @@ pub fn parse_m(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
             path.display()
         ));
     }
-    Ok((mesh, warnings))
+    Ok((mesh, warnings, file_normals))
 }
 
 /// An attribute must be on every vertex or on none: a partial `uv` or `rgb` would render wrong.

@@ -1,5 +1,6 @@
 //! Reading and writing files: meshes (`.m`, `.obj`), scenes (TOML), images.
 
+pub mod fuzz;
 pub mod image;
 pub mod mfile;
 pub mod obj;
@@ -9,20 +10,51 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use std::path::Path;
 
+/// Largest file any loader reads (mesh, texture, scene): 4 GiB, checked before reading.
+pub const MAX_FILE_BYTES: u64 = 1 << 32;
+
+/// Read a whole regular file. Devices, FIFOs and folders are refused before anything is read
+/// (`/dev/zero` would never end), and so is a file over [`MAX_FILE_BYTES`].
+pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::Usage(format!(
+            "{}: not a regular file",
+            path.display()
+        )));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(Error::Usage(format!(
+            "{}: {} bytes is over the cap of {MAX_FILE_BYTES}",
+            path.display(),
+            meta.len()
+        )));
+    }
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
 /// Load a mesh by extension (`.m` or `.obj`); warnings are returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
-    match path
+    load_mesh_detail(path).map(|(m, w, _)| (m, w))
+}
+
+/// [`load_mesh`], also telling whether the file gave vertex normals (otherwise computed).
+pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
+    let parse = match path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .as_deref()
     {
-        Some("m") => mfile::load_m(path),
-        Some("obj") => obj::load_obj(path),
-        _ => Err(Error::parse(
-            path,
-            0,
-            "unknown mesh format (use .m or .obj)",
-        )),
-    }
+        Some("m") => mfile::parse_m_detail,
+        Some("obj") => obj::parse_obj_detail,
+        _ => {
+            return Err(Error::parse(
+                path,
+                0,
+                "unknown mesh format (use .m or .obj)",
+            ));
+        }
+    };
+    parse(&read_regular(path)?, path)
 }

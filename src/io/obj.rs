@@ -1,8 +1,11 @@
-//! Wavefront OBJ through tobj, after our own validation of every face index.
+//! Wavefront OBJ through tobj, after our own validation of every line.
 //!
-//! tobj panics (integer overflow) or silently accepts some bad indices, so each `f` line is
-//! checked here first: indices are non-zero, positive ones name an existing `v`/`vt`/`vn`,
-//! relative (negative) ones do not underflow. Positions must be finite.
+//! tobj panics (integer overflow) or silently accepts some bad input (index 0, relative
+//! indices that underflow, NaN positions, a `w` of 0), so each line is checked here first and
+//! tobj reads a canonical rewrite: finite numbers only, every face index absolute and in range.
+//! Accepted: relative indices, n-gons (fan-triangulated), `v x y z w`, `v x y z r g b`,
+//! comments with any bytes, `\` continuations, CRLF. `mtllib` is a warning: materials come
+//! from the scene, so `.mtl` files are never opened and a missing one cannot break loading.
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -10,21 +13,26 @@ use glam::{Vec2, Vec3};
 use std::path::Path;
 
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = super::read_regular(path)?;
     parse_obj(&bytes, path)
 }
 
 /// Validate and load OBJ text. All groups and objects are merged into one mesh.
 pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
+    parse_obj_detail(bytes, path).map(|(m, w, _)| (m, w))
+}
+
+/// [`parse_obj`], also telling whether the file gave vertex normals (otherwise computed).
+pub fn parse_obj_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
     let mut warnings = Vec::new();
-    validate(bytes, path, &mut warnings)?;
+    let text = canonicalise(bytes, path, &mut warnings)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let mut reader = std::io::BufReader::new(bytes);
+    let mut reader = std::io::BufReader::new(text.as_bytes());
     // Materials are not used by whitted (the scene file gives materials), so .mtl files are
     // never opened: a missing .mtl cannot break loading.
     let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
@@ -74,7 +82,8 @@ pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
     if mesh.triangles.is_empty() {
         return Err(Error::parse(path, 0, "OBJ: no triangles"));
     }
-    if all_normals && !normals.is_empty() {
+    let file_normals = all_normals && !normals.is_empty();
+    if file_normals {
         mesh.normals = Some(normals);
     }
     if all_uvs && !uvs.is_empty() {
@@ -88,32 +97,40 @@ pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
             path.display()
         ));
     }
-    Ok((mesh, warnings))
+    Ok((mesh, warnings, file_normals))
 }
 
-/// Line-by-line check of what tobj trusts: finite `v` coordinates and in-range face indices.
-fn validate(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<()> {
-    let (mut nv, mut nvt, mut nvn) = (0i64, 0i64, 0i64);
+/// Line-by-line check of everything tobj trusts, producing the text tobj then reads.
+///
+/// The output holds only `v x y z` (w applied, colours dropped), `vt u v`, `vn x y z` and
+/// `f` lines with absolute 1-based indices, one per input line (blank lines elsewhere, so
+/// tobj never sees comments, continuations, non-UTF-8 bytes, `l`/`p` records or materials).
+/// Every number is finite; every index names an existing `v`/`vt`/`vn`.
+fn canonicalise(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<String> {
+    let (mut nv, mut nvt, mut nvn) = (0u64, 0u64, 0u64);
     let mut faces = 0usize;
+    let mut out = String::with_capacity(bytes.len().min(1 << 30) + 16);
     let mut logical = String::new();
     let mut first_line = 0;
     for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = index + 1;
         let err = |msg: String| Error::parse(path, line_no, msg);
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let trimmed = raw.trim_ascii();
-        if trimmed.first() == Some(&b'#') {
-            continue;
-        }
-        if trimmed.contains(&0) {
+        // A comment runs from '#' to the end of the line and may hold any bytes.
+        let raw = match raw.iter().position(|&b| b == b'#') {
+            Some(h) => &raw[..h],
+            None => raw,
+        };
+        if raw.contains(&0) {
             return Err(err("binary data (NUL byte); not an OBJ text file".into()));
         }
-        let text = std::str::from_utf8(trimmed)
-            .map_err(|_| err("invalid UTF-8; not an OBJ text file".into()))?;
-        // tobj joins lines ending in '\'.
+        let text = std::str::from_utf8(raw)
+            .map_err(|_| err("invalid UTF-8 outside a comment; not an OBJ text file".into()))?
+            .trim();
         if logical.is_empty() {
             first_line = line_no;
         }
+        // A line ending in '\\' continues on the next one.
         if let Some(cont) = text.strip_suffix('\\') {
             logical.push_str(cont);
             logical.push(' ');
@@ -123,37 +140,95 @@ fn validate(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<()>
         let line = std::mem::take(&mut logical);
         let err = |msg: String| Error::parse(path, first_line, msg);
         let mut tok = line.split_whitespace();
-        match tok.next() {
-            Some("v") => {
-                for k in 0..3 {
-                    let t = tok.next().ok_or_else(|| err(format!("v: missing coordinate {}", k + 1)))?;
-                    let x: f32 = t.parse().map_err(|_| err(format!("v: '{t}' is not a number")))?;
-                    if !x.is_finite() {
-                        return Err(err(format!("v: '{t}' is not a finite number")));
-                    }
+        let Some(kind) = tok.next() else { continue };
+        let nums = |what: &str, tok: std::str::SplitWhitespace| -> Result<Vec<f32>> {
+            tok.map(|t| {
+                let x: f32 = t
+                    .parse()
+                    .map_err(|_| err(format!("{what}: '{t}' is not a number")))?;
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(err(format!("{what}: '{t}' is not a finite number")))
                 }
+            })
+            .collect()
+        };
+        match kind {
+            "v" => {
+                let c = nums("v", tok)?;
+                let p = match c.len() {
+                    // x y z, x y z w (homogeneous), x y z r g b (colour, unused here)
+                    3 | 6 => [c[0], c[1], c[2]],
+                    4 => {
+                        if c[3] == 0.0 {
+                            return Err(err("v: w must not be 0".into()));
+                        }
+                        [c[0] / c[3], c[1] / c[3], c[2] / c[3]]
+                    }
+                    n => {
+                        return Err(err(format!(
+                            "v: expected x y z [w | r g b], found {n} numbers"
+                        )));
+                    }
+                };
+                if !p.iter().all(|x| x.is_finite()) {
+                    return Err(err("v: x/w overflows".into()));
+                }
+                out.push_str(&format!("v {:?} {:?} {:?}", p[0], p[1], p[2]));
                 nv += 1;
             }
-            Some("vt") => nvt += 1,
-            Some("vn") => nvn += 1,
-            Some("f") => {
+            "vt" => {
+                let c = nums("vt", tok)?;
+                if !(1..=3).contains(&c.len()) {
+                    return Err(err(format!("vt: expected u [v [w]], found {} numbers", c.len())));
+                }
+                out.push_str(&format!("vt {:?} {:?}", c[0], c.get(1).copied().unwrap_or(0.0)));
+                nvt += 1;
+            }
+            "vn" => {
+                let c = nums("vn", tok)?;
+                if c.len() != 3 {
+                    return Err(err(format!("vn: expected x y z, found {} numbers", c.len())));
+                }
+                out.push_str(&format!("vn {:?} {:?} {:?}", c[0], c[1], c[2]));
+                nvn += 1;
+            }
+            "f" => {
                 let mut count = 0;
+                out.push('f');
                 for vert in tok {
                     count += 1;
+                    out.push(' ');
                     let mut parts = vert.split('/');
-                    for (slot, (name, n)) in [("v", nv), ("vt", nvt), ("vn", nvn)].into_iter().enumerate() {
+                    for (slot, (name, n)) in [("v", nv), ("vt", nvt), ("vn", nvn)]
+                        .into_iter()
+                        .enumerate()
+                    {
                         let Some(p) = parts.next() else { break };
+                        if slot > 0 {
+                            out.push('/');
+                        }
                         if p.is_empty() {
                             if slot == 0 {
                                 return Err(err(format!("f: '{vert}' has no position index")));
                             }
                             continue;
                         }
-                        let i: i64 = p.parse().map_err(|_| err(format!("f: '{vert}': '{p}' is not an index")))?;
-                        let ok = if i > 0 { i <= n } else { i < 0 && n + i >= 0 };
-                        if !ok {
-                            return Err(err(format!("f: '{vert}': {name} index {i} out of range (1..={n} or -{n}..=-1)")));
-                        }
+                        let i: i64 = p
+                            .parse()
+                            .map_err(|_| err(format!("f: '{vert}': '{p}' is not an index")))?;
+                        // 1..=n counts from the start, -n..=-1 back from the latest entry.
+                        let abs = match i {
+                            1.. if i.unsigned_abs() <= n => i.unsigned_abs(),
+                            ..=-1 if i.unsigned_abs() <= n => n - i.unsigned_abs() + 1,
+                            _ => {
+                                return Err(err(format!(
+                                    "f: '{vert}': {name} index {i} out of range (1..={n} or -{n}..=-1)"
+                                )));
+                            }
+                        };
+                        out.push_str(&abs.to_string());
                     }
                     if parts.next().is_some() {
                         return Err(err(format!("f: '{vert}' has more than 3 '/' parts")));
@@ -164,17 +239,19 @@ fn validate(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<()>
                 }
                 faces += 1;
             }
-            Some("mtllib") => warnings.push(format!(
+            "mtllib" => warnings.push(format!(
                 "{}:{first_line}: materials from .mtl files are ignored (the scene gives materials)",
                 path.display()
             )),
+            // o, g, s, usemtl, l, p and anything else: not needed (all groups are merged).
             _ => {}
         }
+        out.push('\n');
     }
     if faces == 0 {
         return Err(Error::parse(path, 0, "OBJ: no faces"));
     }
-    Ok(())
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -21,6 +21,10 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 pub const MAX_DEPTH: u32 = 64;
 /// Most subdivision levels (each multiplies triangles by 4).
 pub const MAX_SUBDIVIDE: u32 = 6;
+/// Most triangles one `[[mesh]]` may have after subdivision (checked before subdividing).
+pub const MAX_SUBDIVIDED_TRIANGLES: u64 = 1 << 24;
+/// Most texels all `checker` materials of a scene may allocate together (2 of 4096 x 4096).
+pub const MAX_CHECKER_TEXELS: u64 = 1 << 25;
 
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -48,11 +52,43 @@ pub struct ImageDesc {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    #[serde(deserialize_with = "exact3::de")]
     pub eye: [f32; 3],
+    #[serde(deserialize_with = "exact3::de")]
     pub look_at: [f32; 3],
-    #[serde(default = "default_up")]
+    #[serde(default = "default_up", deserialize_with = "exact3::de")]
     pub up: [f32; 3],
     pub vfov: f32,
+}
+
+/// `[T; 3]` fields that refuse arrays of any other length (serde's array impl would let TOML
+/// ignore extra elements).
+mod exact3 {
+    use serde::de::{Deserialize, Deserializer, Error};
+
+    fn three<T, E: Error>(v: Vec<T>) -> Result<[T; 3], E> {
+        let n = v.len();
+        v.try_into()
+            .map_err(|_| E::invalid_length(n, &"an array of 3 numbers"))
+    }
+
+    pub fn de<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<[T; 3], D::Error> {
+        three(Vec::deserialize(d)?)
+    }
+
+    pub fn opt<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<[T; 3]>, D::Error> {
+        Option::<Vec<T>>::deserialize(d)?.map(three).transpose()
+    }
+
+    pub fn opt_vec<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<Vec<[T; 3]>>, D::Error> {
+        Option::<Vec<Vec<T>>>::deserialize(d)?
+            .map(|v| v.into_iter().map(three).collect())
+            .transpose()
+    }
 }
 
 fn default_up() -> [f32; 3] {
@@ -66,7 +102,7 @@ pub struct RenderDesc {
     pub depth: u32,
     #[serde(default = "default_true")]
     pub cull_backfaces: bool,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact3::de")]
     pub ambient: [f32; 3],
 }
 
@@ -90,7 +126,11 @@ fn default_true() -> bool {
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundDesc {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt"
+    )]
     pub color: Option<[f32; 3]>,
     /// A folder with `posx negx posy negy posz negz` images.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -100,7 +140,9 @@ pub struct BackgroundDesc {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
+    #[serde(deserialize_with = "exact3::de")]
     pub position: [f32; 3],
+    #[serde(deserialize_with = "exact3::de")]
     pub intensity: [f32; 3],
 }
 
@@ -109,7 +151,11 @@ pub struct LightDesc {
 pub struct MaterialDesc {
     pub name: String,
     /// Exactly one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt"
+    )]
     pub color: Option<[f32; 3]>,
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub vertex_color: bool,
@@ -136,7 +182,9 @@ fn default_ior() -> f32 {
 #[serde(deny_unknown_fields)]
 pub struct CheckerDesc {
     pub squares: u32,
+    #[serde(deserialize_with = "exact3::de")]
     pub a: [f32; 3],
+    #[serde(deserialize_with = "exact3::de")]
     pub b: [f32; 3],
 }
 
@@ -150,19 +198,35 @@ pub struct MeshDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
     /// ... or inline triangles (`vertices` + `faces`, 0-based, CCW = front) ...
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt_vec"
+    )]
     pub vertices: Option<Vec<[f32; 3]>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt_vec"
+    )]
     pub faces: Option<Vec<[u32; 3]>>,
     /// ... or a generated shape: `sphere` (center, radius), `cube` (center, size), `quad`
     /// (center, size; a horizontal square facing +y).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt"
+    )]
     pub center: Option<[f32; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<f32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt"
+    )]
     pub size: Option<[f32; 3]>,
     /// Midpoint subdivision levels applied after loading (each x4 triangles).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -176,25 +240,48 @@ fn is_zero(v: &u32) -> bool {
 impl SceneFile {
     /// Parse TOML text; errors carry the line and column of the offending key.
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         toml::from_str(text).map_err(|e| {
-            let line = e
+            let (line, col) = e
                 .span()
-                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
-                .unwrap_or(0);
-            let col = e
-                .span()
-                .map(|s| {
-                    let start = s.start.min(text.len());
-                    start - text[..start].rfind('\n').map_or(0, |i| i + 1) + 1
-                })
-                .unwrap_or(0);
-            Error::parse(path, line, format!("column {col}: {}", e.message()))
+                .map(|s| line_col(text.as_bytes(), s.start))
+                .unwrap_or((0, 0));
+            // toml's messages span several lines (a source excerpt); keep the first line.
+            let msg = e.message().lines().next().unwrap_or("invalid TOML").trim();
+            Error::parse(path, line, format!("column {col}: {msg}"))
         })
+    }
+
+    /// Read and parse a scene file; bytes that are not UTF-8 are refused with their line.
+    pub fn load(path: &Path) -> Result<SceneFile> {
+        let bytes = crate::io::read_regular(path)?;
+        let text = std::str::from_utf8(&bytes).map_err(|e| {
+            let (line, col) = line_col(&bytes, e.valid_up_to());
+            Error::parse(path, line, format!("column {col}: invalid UTF-8"))
+        })?;
+        SceneFile::parse(text, path)
     }
 
     pub fn to_toml(&self) -> String {
         toml::to_string(self).expect("scene serialises")
     }
+}
+
+/// 1-based (line, column in characters) of byte offset `at`, clamped to the text.
+fn line_col(text: &[u8], at: usize) -> (usize, usize) {
+    let before = &text[..at.min(text.len())];
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    // Count characters, not bytes (continuation bytes 10xxxxxx do not start one).
+    let col = before[line_start..]
+        .iter()
+        .filter(|&&b| b & 0xC0 != 0x80)
+        .count()
+        + 1;
+    (line, col)
 }
 
 /// Where scene files look for meshes and images.
@@ -315,14 +402,27 @@ pub fn build_scene(
         ));
     }
     let forward = look_at - eye;
-    if forward.length_squared() == 0.0 || !forward.is_finite() {
+    if forward.length_squared() == 0.0 {
         return Err(Error::scene(
             path,
             "camera.look_at: must differ from camera.eye",
         ));
     }
+    // The camera normalises `look_at - eye`: its length (squared) must stay finite.
+    if !forward.length_squared().is_finite() {
+        return Err(Error::scene(
+            path,
+            "camera.look_at: too far from camera.eye (the distance overflows f32)",
+        ));
+    }
+    if !(up.length_squared() > 0.0 && up.length_squared().is_finite()) {
+        return Err(Error::scene(
+            path,
+            "camera.up: its length must be > 0 and its square finite",
+        ));
+    }
     let side = forward.normalize().cross(up);
-    if !(side.length() > 1e-6 * up.length()) || up.length_squared() == 0.0 {
+    if !(side.length() > 1e-6 * up.length()) {
         return Err(Error::scene(
             path,
             "camera.up: must not be zero or parallel to the view direction",
@@ -360,6 +460,23 @@ pub fn build_scene(
     }
 
     let mut materials = Vec::new();
+    // One texture per file, however many materials use it.
+    let mut textures: Vec<(PathBuf, Arc<Texture>)> = Vec::new();
+    // Checker textures are allocated below: their total size is checked before any is made.
+    let checker_texels: u64 = file
+        .materials
+        .iter()
+        .filter_map(|m| m.checker.as_ref())
+        .map(|c| (c.squares.clamp(1, 4096) as u64 * 16).min(4096).pow(2))
+        .sum();
+    if checker_texels > MAX_CHECKER_TEXELS {
+        return Err(Error::scene(
+            path,
+            format!(
+                "material.checker: all checker textures together would take {checker_texels} texels, over the cap of {MAX_CHECKER_TEXELS}"
+            ),
+        ));
+    }
     for (i, m) in file.materials.iter().enumerate() {
         let key = |k: &str| format!("material[{i}] '{}'.{k}", m.name);
         if materials.iter().any(|x: &Material| x.name == m.name) {
@@ -386,7 +503,15 @@ pub fn build_scene(
         } else if m.vertex_color {
             Albedo::VertexColor
         } else if let Some(t) = &m.texture {
-            Albedo::Texture(Arc::new(load_texture(&search.resolve(t, path)?)?))
+            let file = search.resolve(t, path)?;
+            match textures.iter().find(|(p, _)| *p == file) {
+                Some((_, tex)) => Albedo::Texture(tex.clone()),
+                None => {
+                    let tex = Arc::new(load_texture(&file)?);
+                    textures.push((file, tex.clone()));
+                    Albedo::Texture(tex)
+                }
+            }
         } else {
             let ch = m.checker.as_ref().expect("one source");
             if !(1..=4096).contains(&ch.squares) {
@@ -445,11 +570,35 @@ pub fn build_scene(
                 ),
             ));
         }
+        let subdivided = (mesh.triangles.len() as u64).saturating_mul(1 << (2 * d.subdivide));
+        if subdivided > MAX_SUBDIVIDED_TRIANGLES {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: {} levels would make {subdivided} triangles, over the cap of {MAX_SUBDIVIDED_TRIANGLES}",
+                    key("subdivide"),
+                    d.subdivide
+                ),
+            ));
+        }
         let mesh = if d.subdivide > 0 {
             mesh.subdivide(d.subdivide)
         } else {
             mesh
         };
+        if !mesh.positions.iter().all(|p| p.is_finite()) {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: coordinates overflow f32 (center, size or radius too large)",
+                    key(if d.subdivide > 0 {
+                        "subdivide"
+                    } else {
+                        "shape"
+                    })
+                ),
+            ));
+        }
         match &materials[material].albedo {
             Albedo::VertexColor if mesh.colors.is_none() => {
                 return Err(Error::scene(
@@ -516,6 +665,12 @@ fn mesh_of(
                 "{}: give exactly one of file, vertices + faces, shape",
                 key("file")
             ),
+        ));
+    }
+    if d.faces.is_some() && d.vertices.is_none() {
+        return Err(Error::scene(
+            path,
+            format!("{}: faces need inline vertices", key("faces")),
         ));
     }
     if let Some(f) = &d.file {

@@ -1,0 +1,203 @@
+//! `whitted info FILE`: what a mesh, scene, image or cube-map folder holds, after the same
+//! validation as loading it for a render. As `key: value` lines or one JSON object.
+
+use crate::error::Result;
+use crate::io::image::{ImageInfo, decode_texture, load_cubemap_info};
+use crate::io::load_mesh_detail;
+use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::mesh::Mesh;
+use crate::scene::Background;
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// An ordered list of facts about one file; `kind` comes first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Info {
+    pub fields: Vec<(&'static str, Value)>,
+    /// Loader warnings (degenerate faces, ignored `.mtl`, ...).
+    pub warnings: Vec<String>,
+}
+
+impl Info {
+    /// The value of one field.
+    pub fn get(&self, key: &str) -> Option<&Value> {
+        self.fields.iter().find(|(k, _)| *k == key).map(|(_, v)| v)
+    }
+
+    /// One JSON object on one line: every field, plus `warnings`.
+    pub fn to_json(&self) -> String {
+        let mut map = serde_json::Map::new();
+        for (k, v) in &self.fields {
+            map.insert((*k).to_string(), v.clone());
+        }
+        map.insert("warnings".into(), json!(self.warnings));
+        Value::Object(map).to_string()
+    }
+
+    /// `key: value` lines for people.
+    pub fn to_text(&self) -> String {
+        let mut out = String::new();
+        for (k, v) in &self.fields {
+            let v = match v {
+                Value::String(s) => s.clone(),
+                other => other.to_string(),
+            };
+            out.push_str(&format!("{k}: {v}\n"));
+        }
+        for w in &self.warnings {
+            out.push_str(&format!("warning: {w}\n"));
+        }
+        out
+    }
+}
+
+/// Inspect `path`: a folder is a cube map, `.m` / `.obj` a mesh, `.toml` a scene, anything
+/// else an image. Errors are the loaders' one-line errors.
+pub fn info(path: &Path) -> Result<Info> {
+    if path.is_dir() {
+        let (cube, img) = load_cubemap_info(path)?;
+        let mut info = image_fields("cubemap", &img);
+        info.fields.push(("faces", json!(cube.faces.len())));
+        return Ok(info);
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    match ext.as_str() {
+        "m" | "obj" => {
+            let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
+            let mut info = mesh_fields(&mesh, &ext, file_normals);
+            info.warnings = warnings;
+            Ok(info)
+        }
+        "toml" => scene_info(path),
+        _ => {
+            let bytes = crate::io::read_regular(path)?;
+            let (_, img) = decode_texture(&bytes, path)?;
+            Ok(image_fields("image", &img))
+        }
+    }
+}
+
+/// An f32 as the f64 with the same shortest decimal form (0.1, not 0.10000000149011612).
+fn short(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::NAN)
+}
+
+fn image_fields(kind: &str, img: &ImageInfo) -> Info {
+    Info {
+        fields: vec![
+            ("kind", json!(kind)),
+            ("format", json!(img.format)),
+            ("width", json!(img.width)),
+            ("height", json!(img.height)),
+            ("channels", json!(img.channels)),
+            ("bits", json!(img.bits)),
+        ],
+        warnings: Vec::new(),
+    }
+}
+
+/// Counts, attributes, bounds, degenerate triangles and open edges of a loaded mesh.
+pub fn mesh_fields(mesh: &Mesh, format: &str, file_normals: bool) -> Info {
+    let mut attributes = Vec::new();
+    if file_normals {
+        attributes.push("normal");
+    }
+    if mesh.uvs.is_some() {
+        attributes.push("uv");
+    }
+    if mesh.colors.is_some() {
+        attributes.push("rgb");
+    }
+    let bounds = mesh
+        .bounds()
+        .map(|(lo, hi)| json!({"min": lo.to_array().map(short), "max": hi.to_array().map(short)}))
+        .unwrap_or(Value::Null);
+    Info {
+        fields: vec![
+            ("kind", json!("mesh")),
+            ("format", json!(format)),
+            ("vertices", json!(mesh.positions.len())),
+            ("triangles", json!(mesh.triangles.len())),
+            ("attributes", json!(attributes)),
+            ("bounds", bounds),
+            ("degenerate_triangles", json!(mesh.degenerate_count())),
+            ("open_edges", json!(mesh.open_edges())),
+        ],
+        warnings: Vec::new(),
+    }
+}
+
+fn scene_info(path: &Path) -> Result<Info> {
+    let file = SceneFile::load(path)?;
+    let search = SearchPath::for_scene(path.parent());
+    let (scene, warnings) = build_scene(&file, path, &search)?;
+    let background = match &scene.background {
+        Background::Color(c) => json!({"color": c.to_array().map(short)}),
+        Background::CubeMap(cube) => {
+            json!({"cubemap": file.background.cubemap, "size": cube.faces[0].width})
+        }
+    };
+    let objects: Vec<Value> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            json!({
+                "name": o.name,
+                "material": scene.materials.get(o.material).map(|m| m.name.as_str()),
+                "vertices": o.mesh.positions.len(),
+                "triangles": o.mesh.triangles.len(),
+            })
+        })
+        .collect();
+    let v = &scene.view;
+    Ok(Info {
+        fields: vec![
+            ("kind", json!("scene")),
+            ("width", json!(scene.width)),
+            ("height", json!(scene.height)),
+            ("depth", json!(scene.depth)),
+            ("cull_backfaces", json!(scene.cull_backfaces)),
+            (
+                "camera",
+                json!({"eye": v.eye.to_array().map(short), "look_at": v.look_at.to_array().map(short), "up": v.up.to_array().map(short), "vfov": short(v.vfov)}),
+            ),
+            ("background", background),
+            ("lights", json!(scene.lights.len())),
+            (
+                "materials",
+                json!(
+                    scene
+                        .materials
+                        .iter()
+                        .map(|m| m.name.as_str())
+                        .collect::<Vec<_>>()
+                ),
+            ),
+            ("objects", json!(objects)),
+            ("triangles", json!(scene.triangle_count())),
+        ],
+        warnings,
+    })
+}
+
+/// `whitted info` as a library call: the text (or JSON) to print, or the one-line error.
+pub fn run(path: &Path, as_json: bool) -> Result<String> {
+    let info = info(path)?;
+    Ok(if as_json {
+        info.to_json() + "\n"
+    } else {
+        info.to_text()
+    })
+}
+
+/// [`run`], printed to stdout (a closed pipe is not an error worth a panic).
+pub fn print(path: &Path, as_json: bool) -> Result<()> {
+    use std::io::Write;
+    let text = run(path, as_json)?;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    Ok(())
+}

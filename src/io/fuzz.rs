@@ -1,0 +1,105 @@
+//! The bodies of the fuzz targets (`fuzz/fuzz_targets/*.rs`), here so that ordinary tests can
+//! run them over the seed corpora on stable. Each takes arbitrary bytes and must never panic,
+//! hang or allocate without bound; an `Err` is a fine outcome.
+
+use crate::error::{Error, Result};
+use crate::io::image::{decode_cubemap, decode_texture};
+use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::{mfile, obj};
+use std::path::{Path, PathBuf};
+
+/// The `.m` reader on arbitrary bytes.
+pub fn mfile(data: &[u8]) -> Result<()> {
+    let (mesh, _) = mfile::parse_m(data, Path::new("fuzz.m"))?;
+    check_mesh(&mesh);
+    Ok(())
+}
+
+/// The OBJ loader (our validation, then tobj) on arbitrary bytes.
+pub fn obj(data: &[u8]) -> Result<()> {
+    let (mesh, _) = obj::parse_obj(data, Path::new("fuzz.obj"))?;
+    check_mesh(&mesh);
+    Ok(())
+}
+
+/// The scene parser and validator on arbitrary bytes. Relative file names resolve only in
+/// `empty_dir` (give an empty folder), so nothing outside the input is read by name.
+pub fn scene(data: &[u8], empty_dir: &Path) -> Result<()> {
+    let path = Path::new("fuzz.toml");
+    let text = std::str::from_utf8(data).map_err(|_| Error::parse(path, 1, "invalid UTF-8"))?;
+    let file = SceneFile::parse(text, path)?;
+    let search = SearchPath {
+        dirs: vec![empty_dir.to_path_buf()],
+    };
+    let (scene, _) = build_scene(&file, path, &search)?;
+    assert!(scene.width > 0 && scene.height > 0);
+    for o in &scene.objects {
+        check_mesh(&o.mesh);
+    }
+    Ok(())
+}
+
+/// Extensions the image target picks from with its first byte (TGA has no signature, so the
+/// name matters).
+pub const IMAGE_EXTENSIONS: [&str; 6] = ["png", "jpg", "tga", "bmp", "hdr", "exr"];
+
+/// One texture decode: the first byte picks the file extension, the rest is the file.
+pub fn image(data: &[u8]) -> Result<()> {
+    let (&pick, bytes) = data
+        .split_first()
+        .ok_or_else(|| Error::image(Path::new("fuzz"), "empty input"))?;
+    let name = format!(
+        "fuzz.{}",
+        IMAGE_EXTENSIONS[pick as usize % IMAGE_EXTENSIONS.len()]
+    );
+    let (tex, info) = decode_texture(bytes, Path::new(&name))?;
+    assert_eq!(tex.texels.len(), tex.width * tex.height);
+    assert!(info.width > 0 && info.height > 0);
+    assert!(tex.texels.iter().all(|t| t.is_finite()));
+    Ok(())
+}
+
+/// Separates the six faces in a cube-map fuzz input.
+pub const FACE_SEPARATOR: &[u8] = b"--face--";
+
+/// A cube map from six face files: the first byte picks the extension (as for [`image`]),
+/// the rest is split on [`FACE_SEPARATOR`] into posx, negx, posy, negy, posz, negz.
+pub fn cubemap(data: &[u8]) -> Result<()> {
+    let (&pick, rest) = data
+        .split_first()
+        .ok_or_else(|| Error::image(Path::new("fuzz"), "empty input"))?;
+    let ext = IMAGE_EXTENSIONS[pick as usize % IMAGE_EXTENSIONS.len()];
+    let mut parts = split_on(rest, FACE_SEPARATOR);
+    parts.resize(6, &[]);
+    let names: [PathBuf; 6] = std::array::from_fn(|k| {
+        PathBuf::from(format!("cube/{}.{ext}", crate::texture::CUBE_FACES[k]))
+    });
+    let faces = std::array::from_fn(|k| (names[k].as_path(), parts[k]));
+    let (cube, _) = decode_cubemap(faces)?;
+    let w = cube.faces[0].width;
+    assert!(cube.faces.iter().all(|f| f.width == w && f.height == w));
+    Ok(())
+}
+
+fn split_on<'a>(mut data: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {
+    let mut out = Vec::new();
+    while let Some(at) = data.windows(sep.len()).position(|w| w == sep) {
+        out.push(&data[..at]);
+        data = &data[at + sep.len()..];
+    }
+    out.push(data);
+    out
+}
+
+/// What every loaded mesh promises the renderer.
+fn check_mesh(mesh: &crate::mesh::Mesh) {
+    let n = mesh.positions.len();
+    assert!(!mesh.triangles.is_empty());
+    assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
+    assert!(mesh.positions.iter().all(|p| p.is_finite()));
+    let normals = mesh.normals.as_ref().expect("normals filled in");
+    assert_eq!(normals.len(), n);
+    assert!(normals.iter().all(|v| v.is_finite()));
+    assert!(mesh.uvs.as_ref().is_none_or(|u| u.len() == n));
+    assert!(mesh.colors.as_ref().is_none_or(|c| c.len() == n));
+}
