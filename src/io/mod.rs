@@ -3,6 +3,7 @@
 pub mod image;
 pub mod mfile;
 pub mod obj;
+pub mod rays;
 pub mod scene_file;
 
 use crate::error::{Error, Result};
