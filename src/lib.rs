@@ -30,5 +30,6 @@ pub mod scenes;
 pub mod shade;
 pub mod simd;
 pub mod texture;
+pub mod trace;
 
 pub use error::{Error, Result};

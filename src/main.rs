@@ -37,6 +37,31 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Trace a binary ray file against a mesh and write the closest hits (see the README).
+    TraceRays(TraceArgs),
+}
+
+#[derive(clap::Args)]
+struct TraceArgs {
+    /// A `.m` or `.obj` mesh.
+    mesh: PathBuf,
+    /// Input rays: little-endian f32 `ox oy oz dx dy dz tnear tfar`, 32 bytes each.
+    #[arg(long)]
+    rays: PathBuf,
+    /// Output hits: `u32 triangle, f32 t, f32 b1, f32 b2`, 16 bytes each.
+    #[arg(long)]
+    hits: PathBuf,
+    /// packet (intersect8, default) or scalar (intersect1).
+    #[arg(long, default_value = "packet")]
+    engine: String,
+    /// Skip back faces.
+    #[arg(long)]
+    cull: bool,
+    /// Midpoint subdivision levels (each x4 triangles; face order: 4 children per face).
+    #[arg(long, default_value_t = 0)]
+    subdivide: u32,
+    #[arg(long, short = 't')]
+    threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
@@ -65,6 +90,73 @@ struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short = 'q')]
     quiet: bool,
+    /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
+    #[arg(long, default_value_t = 0)]
+    subdivide: u32,
+}
+
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| Error::Usage(format!("--threads {n}: {e}")))?;
+    }
+    Ok(())
+}
+
+fn check_subdivide(k: u32) -> Result<()> {
+    if k > whitted::io::scene_file::MAX_SUBDIVIDE {
+        return Err(Error::Usage(format!(
+            "--subdivide {k} is over the cap of {}",
+            whitted::io::scene_file::MAX_SUBDIVIDE
+        )));
+    }
+    Ok(())
+}
+
+fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
+    use whitted::trace::{Engine, trace_rays};
+    let engine = match args.engine.as_str() {
+        "packet" => Engine::Packet,
+        "scalar" => Engine::Scalar,
+        e => {
+            return Err(Error::Usage(format!(
+                "unknown engine '{e}' (packet, scalar)"
+            )));
+        }
+    };
+    check_subdivide(args.subdivide)?;
+    set_threads(args.threads)?;
+    let (mesh, warnings) = whitted::io::load_mesh(&args.mesh)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    let mesh = mesh.subdivide(args.subdivide);
+    let tris: Vec<[glam::Vec3; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| mesh.positions[i as usize]))
+        .collect();
+    let accel = whitted::accel::Accel::build(&tris, whitted::accel::BuildQuality::default());
+    let bytes = std::fs::read(&args.rays).map_err(|e| Error::io(&args.rays, e))?;
+    let rays = whitted::io::rays::parse_rays(&bytes, &args.rays)?;
+    let start = std::time::Instant::now();
+    let hits = trace_rays(&accel, &rays, engine, args.cull);
+    let secs = start.elapsed().as_secs_f64();
+    std::fs::write(&args.hits, whitted::io::rays::encode_hits(&hits))
+        .map_err(|e| Error::io(&args.hits, e))?;
+    println!(
+        "{} rays, {} hits, {:.3} s, {:.2} Mrays/s ({} engine, {} triangles, BVH {:.1} ms)",
+        rays.len(),
+        hits.iter().filter(|h| h.is_some()).count(),
+        secs,
+        rays.len() as f64 / secs.max(1e-9) / 1e6,
+        args.engine,
+        tris.len(),
+        accel.build_time.as_secs_f64() * 1e3
+    );
+    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -73,6 +165,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cmd_render(args),
         Command::Scene { name } => cmd_scene(&name),
         Command::Info { file, json } => whitted::info::print(&file, json),
+        Command::TraceRays(args) => cmd_trace_rays(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -158,14 +251,13 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             out.display()
         )));
     }
-    if let Some(n) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| Error::Usage(format!("--threads {n}: {e}")))?;
-    }
+    check_subdivide(args.subdivide)?;
+    set_threads(args.threads)?;
 
-    let (scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))?;
+    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))?;
+    for o in &mut scene.objects {
+        o.mesh = o.mesh.subdivide(args.subdivide);
+    }
     for w in warnings {
         eprintln!("warning: {w}");
     }

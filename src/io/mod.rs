@@ -4,6 +4,7 @@ pub mod fuzz;
 pub mod image;
 pub mod mfile;
 pub mod obj;
+pub mod rays;
 pub mod scene_file;
 
 use crate::error::{Error, Result};

@@ -144,7 +144,10 @@ pub fn secondaries1(world: &World, s: &Surface, d: Vec3, depth: u32) -> [Option<
     // total internal reflection traces It along d_r.
     if m.kt > 0.0 {
         let eta = if s.back { m.ior } else { 1.0 / m.ior };
-        let dt = refract(d, s.n, eta).map_or(dr, |t| t.normalize());
+        // "with N facing against d": an interpolated normal can still lean along d after the
+        // back-face flip; turn it so cosi >= 0 (only for the refraction formula).
+        let nt = if d.dot(s.n) > 0.0 { -s.n } else { s.n };
+        let dt = refract(d, nt, eta).map_or(dr, |t| t.normalize());
         out[1] = Some(Secondary {
             ray: Ray::new(
                 offset_origin(s.q, s.ng, dt, world.eps),
