@@ -1,0 +1,6 @@
+Vertex 1 0 0 0
+Vertex 2 1 0 0
+Vertex 3 0 1 0
+Face 1 1 2 3
+Face 2 1 1 2
+Face 3 3 2 1
