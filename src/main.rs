@@ -39,6 +39,8 @@ enum Command {
     },
     /// Trace a binary ray file against a mesh and write the closest hits (see the README).
     TraceRays(TraceArgs),
+    /// Intersection throughput on the Embree peer's workloads, beside rt-bench when found.
+    Bench(whitted::bench::Options),
 }
 
 #[derive(clap::Args)]
@@ -166,6 +168,7 @@ fn main() -> ExitCode {
         Command::Scene { name } => cmd_scene(&name),
         Command::Info { file, json } => whitted::info::print(&file, json),
         Command::TraceRays(args) => cmd_trace_rays(args),
+        Command::Bench(opts) => whitted::bench::run(&opts),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
