@@ -1,0 +1,289 @@
+//! The bench's workload generator against the Embree peer's spec, and the peer-output parser.
+
+mod common;
+
+use glam::Vec3;
+use whitted::accel::{Accel, BuildQuality, intersect1};
+use whitted::bench::{self, Framing, Workload, Workloads};
+use whitted::mesh::Mesh;
+
+/// A small closed mesh away from the kitten's box (so the camera is framed): an octahedron
+/// subdivided twice (128 triangles).
+fn small_mesh() -> Mesh {
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) + Vec3::new(3.0, -1.0, 0.5);
+    let m = Mesh {
+        positions: vec![
+            p(1.0, 0.0, 0.0),
+            p(-1.0, 0.0, 0.0),
+            p(0.0, 1.0, 0.0),
+            p(0.0, -1.0, 0.0),
+            p(0.0, 0.0, 1.0),
+            p(0.0, 0.0, -1.0),
+        ],
+        triangles: vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ],
+        ..Default::default()
+    };
+    bench::subdivide_like_peer(&m, 2)
+}
+
+fn build(m: &Mesh) -> Accel {
+    Accel::build(&bench::triangles(m), BuildQuality::default())
+}
+
+#[test]
+fn rng_and_constants_are_the_peers() {
+    let mut s = bench::SEED;
+    let u: Vec<u64> = (0..4).map(|_| bench::rng_u64(&mut s)).collect();
+    assert_eq!(
+        u,
+        [
+            0x599ed017fb08fc85,
+            0x2c73f08458540fa5,
+            0x883ebce5a3f27c77,
+            0x3fbef740e9177b3f
+        ]
+    );
+    let mut s = bench::SEED;
+    assert_eq!(bench::rng_unit(&mut s), 0.35007954202140812);
+    assert_eq!(bench::rng_unit(&mut s), 0.17364409667091263);
+    assert_eq!(bench::tan_half_fov().to_bits(), 0x3fd4cb7bfb4961ae);
+}
+
+#[test]
+fn small_mesh_workloads() {
+    let mesh = small_mesh();
+    assert_eq!(mesh.triangles.len(), 128);
+    assert_eq!(mesh.open_edges(), 0);
+    let accel = build(&mesh);
+    let (w, h) = (96, 54);
+    let work = Workloads::generate(&mesh, &accel, w, h);
+    let fr = work.framing;
+    assert!(!fr.canonical);
+    // counts: every pixel once; one shadow and one incoherent ray per primary hit
+    assert_eq!(work.primary.len(), (w * h) as usize);
+    let hits: Vec<_> = work
+        .primary
+        .iter()
+        .filter_map(|r| intersect1(&accel, r, false).map(|hit| (r, hit)))
+        .collect();
+    let sec = &work.secondary;
+    assert!(hits.len() > 100, "the framed mesh fills part of the image");
+    assert!(hits.len() < work.primary.len());
+    assert_eq!(sec.primary_hits.len(), hits.len());
+    assert_eq!(sec.shadow.len(), hits.len());
+    assert_eq!(sec.incoherent.len(), hits.len());
+    let light = Vec3::new(fr.light[0] as f32, fr.light[1] as f32, fr.light[2] as f32);
+    let eps = fr.eps as f32;
+    for (k, (ray, hit)) in hits.iter().enumerate() {
+        assert_eq!(
+            sec.primary_hits[k], **ray,
+            "hits-only keeps the primary ray"
+        );
+        let q = ray.origin + hit.t * ray.dir;
+        let ng = Vec3::from(bench::embree_ng(&mesh, hit.tri)).normalize();
+        let n = if ng.dot(ray.dir) > 0.0 { -ng } else { ng };
+        // shadow: from just off the surface, on the light's side, towards the light
+        let s = &sec.shadow[k];
+        let to_light = (light - q).normalize();
+        assert!((s.dir - to_light).length() < 1e-5, "{k}");
+        assert!((s.dir.length() - 1.0).abs() < 1e-6);
+        let off = s.origin - q;
+        assert!((off.length() - eps).abs() < 0.05 * eps, "{k}: {off}");
+        assert!(off.dot(n).signum() == to_light.dot(n).signum(), "{k}");
+        // tfar: one ulp short of the distance from q (computed in f64 by the generator)
+        let dist = (light - q).length();
+        assert!(
+            (s.tfar - dist).abs() < 1e-5 * dist,
+            "{k}: {} {dist}",
+            s.tfar
+        );
+        assert_eq!(s.tnear, 0.0);
+        // incoherent: unit, in the hemisphere of the surface's viewer side, origin off it
+        let i = &sec.incoherent[k];
+        assert!((i.dir.length() - 1.0).abs() < 1e-6, "{k}");
+        assert!(i.dir.dot(n) >= -1e-6, "{k}: {} {n}", i.dir);
+        assert!(((i.origin - q) - eps * n).length() < 0.05 * eps, "{k}");
+        assert_eq!((i.tnear, i.tfar), (0.0, f32::INFINITY));
+    }
+    // directions cover the hemisphere: mean cos about 1/2
+    let mean: f32 = hits
+        .iter()
+        .zip(&sec.incoherent)
+        .map(|((r, h), i)| {
+            let ng = Vec3::from(bench::embree_ng(&mesh, h.tri)).normalize();
+            i.dir.dot(if ng.dot(r.dir) > 0.0 { -ng } else { ng })
+        })
+        .sum::<f32>()
+        / hits.len() as f32;
+    assert!((mean - 0.5).abs() < 0.1, "{mean}");
+    // determinism
+    let again = Workloads::generate(&mesh, &build(&mesh), w, h);
+    for ((_, a), (_, b)) in work.sets().into_iter().zip(again.sets()) {
+        assert_eq!(bench::ray_hash(a), bench::ray_hash(b));
+    }
+    // scalar and packet agree on every set, and the counts are consistent
+    let m = bench::measure(&accel, &work, 1, 1);
+    assert_eq!(m.len(), 8);
+    for pair in m.chunks(2) {
+        assert_eq!(pair[0].workload, pair[1].workload);
+        assert_eq!(pair[0].results, pair[1].results, "{:?}", pair[0].workload);
+    }
+    assert_eq!(m[0].results.count(), hits.len());
+    let m2 = bench::measure(&accel, &work, 2, 1);
+    for (a, b) in m.iter().zip(&m2) {
+        assert_eq!(a.results, b.results, "threads do not change results");
+    }
+}
+
+/// The kitten at the peer's full size: mesh (sub 0 and 1) and primary set hash to the values
+/// the peer's dumps hash to (notes: embree_workloads.md §12); the hit counts are Embree's.
+#[test]
+fn kitten_matches_the_peers_hashes() {
+    let (mesh, _) = whitted::io::load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
+    let mesh_hash = |m: &Mesh| {
+        (
+            bench::fnv1a(
+                m.positions
+                    .iter()
+                    .flat_map(|p| p.to_array())
+                    .flat_map(f32::to_le_bytes),
+            ),
+            bench::fnv1a(m.triangles.iter().flatten().flat_map(|i| i.to_le_bytes())),
+        )
+    };
+    let m0 = bench::subdivide_like_peer(&mesh, 0);
+    assert_eq!(mesh_hash(&m0), (0xc2cf83efc5617984, 0xf61501028921e877));
+    let m1 = bench::subdivide_like_peer(&mesh, 1);
+    assert_eq!((m1.positions.len(), m1.triangles.len()), (40876, 81752));
+    assert_eq!(mesh_hash(&m1), (0xe322aef8f62694fe, 0x4983114951a4a5c7));
+    let fr = Framing::of(&m0);
+    assert!(fr.canonical);
+    assert_eq!(fr.eps, 2.665759649173855e-05);
+    let primary = bench::primary_rays(&fr, bench::WIDTH, bench::HEIGHT);
+    assert_eq!(primary.len(), 2073600);
+    assert_eq!(primary[0].dir.x.to_bits(), 0xbf402759);
+    assert_eq!(primary[1].dir.z.to_bits(), 0xbf27f12e);
+    assert_eq!(bench::ray_hash(&primary), 0xd3ab0067417fd591);
+    let work = Workloads::generate(&m0, &build(&m0), bench::WIDTH, bench::HEIGHT);
+    // whitted hits the same 201702 pixels as Embree, so hits-only is Embree's set exactly
+    assert_eq!(work.secondary.primary_hits.len(), 201702);
+    assert_eq!(
+        bench::ray_hash(&work.secondary.primary_hits),
+        0xa8257c5afcd906a3
+    );
+}
+
+/// With Embree's own per-pixel `(prim, t, Ng)` (the refdump tool's `primary_hitinfo.bin`), the
+/// generator reproduces Embree's shadow and incoherent sets bit for bit. Runs only where
+/// `WHITTED_EMBREE_REFSETS` names a folder of those dumps (kitten, subdivide 0).
+#[test]
+fn embree_hits_give_embrees_exact_sets() {
+    let Some(dir) = std::env::var_os("WHITTED_EMBREE_REFSETS") else {
+        eprintln!("WHITTED_EMBREE_REFSETS not set: skipped");
+        return;
+    };
+    let dir = std::path::PathBuf::from(dir);
+    let info = std::fs::read(dir.join("primary_hitinfo.bin")).unwrap();
+    let f = |b: &[u8]| f32::from_le_bytes(b.try_into().unwrap());
+    let hits: Vec<Option<bench::SurfaceHit>> = info
+        .chunks(20)
+        .map(|r| {
+            (u32::from_le_bytes(r[0..4].try_into().unwrap()) != u32::MAX).then(|| {
+                bench::SurfaceHit {
+                    t: f(&r[4..8]),
+                    ng: [f(&r[8..12]), f(&r[12..16]), f(&r[16..20])],
+                }
+            })
+        })
+        .collect();
+    let (mesh, _) = whitted::io::load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
+    let fr = Framing::of(&mesh);
+    let primary = bench::primary_rays(&fr, bench::WIDTH, bench::HEIGHT);
+    let sec = bench::secondary_rays(&fr, &primary, &hits);
+    assert_eq!(bench::ray_hash(&sec.shadow), 0xd3dd657e6f093e1e);
+    assert_eq!(bench::ray_hash(&sec.incoherent), 0x26c1eed474d26645);
+}
+
+/// rt-bench's output (kitten, 1 thread, `--quality medium`), as captured on the dev machine.
+const SAMPLE: &str = r#"mesh /work/shared/meshes/kitten.m subdivide 0: 10219 vertices, 20438 triangles (load 0.04 s)
+embree 3.13.5, device config "threads=1", native ray8 1 ray16 0, ROBUST 0
+camera canonical: eye (1.6 0.9 4.4) look_at (0 -0.15 0) L1 (5 6 3), 1920x1080 vfov 36
+build MEDIUM (threads 1): wall best 8.35 ms, median 9.79 ms | process cpu best 8.36 ms, median 9.80 ms
+ primary (1920x1080, 4x4 blocks):
+  primary rtcIntersect1          2073600 rays  wall best    15.63 med    15.02 | cpu best    16.29 med    15.50 Mrays/s
+  primary rtcIntersect8 (4x2)    2073600 rays  wall best    23.22 med    23.15 | cpu best    23.22 med    23.21 Mrays/s
+  primary rtcIntersect16 (4x4)   2073600 rays  wall best    21.30 med    19.54 | cpu best    21.29 med    20.59 Mrays/s
+  primary hits 201702 of 2073600 (9.7%); packet-vs-single primID mismatches 0
+  primary-hits-only Intersect1    201702 rays  wall best     5.38 med     5.23 | cpu best     5.38 med     5.23 Mrays/s
+  primary-hits-only Intersect8    201702 rays  wall best     5.86 med     5.34 | cpu best     5.94 med     5.86 Mrays/s
+ shadow rays to L1 from primary hits:
+  shadow rtcOccluded1             201702 rays  wall best     6.35 med     6.27 | cpu best     6.36 med     6.30 Mrays/s
+  shadow rtcOccluded8             201702 rays  wall best     9.16 med     8.32 | cpu best     9.17 med     8.59 Mrays/s
+  shadow rtcOccluded16            201702 rays  wall best     7.75 med     7.60 | cpu best     7.93 med     7.65 Mrays/s
+  occluded 61028 of 201702 (30.3%)
+ incoherent rays (uniform hemisphere about Ng, seed 1234567):
+  incoherent rtcIntersect1        201702 rays  wall best     4.72 med     4.12 | cpu best     4.72 med     4.22 Mrays/s
+  incoherent rtcIntersect8        201702 rays  wall best     5.57 med     4.61 | cpu best     5.57 med     4.68 Mrays/s
+  incoherent rtcIntersect16       201702 rays  wall best     5.48 med     4.69 | cpu best     5.48 med     4.69 Mrays/s
+  incoherent hits 26102 of 201702 (12.9%)
+"#;
+
+#[test]
+fn parses_rt_bench_output() {
+    let p = bench::parse_peer(SAMPLE).unwrap();
+    assert!(p.version.starts_with("embree 3.13.5"));
+    assert_eq!(p.triangles, Some(20438));
+    assert_eq!(p.camera, "canonical");
+    assert_eq!(
+        (p.build_best_ms, p.build_median_ms),
+        (Some(8.35), Some(9.79))
+    );
+    assert_eq!(p.kernels.len(), 11);
+    let k = p.kernel(Workload::Primary, 8).unwrap();
+    assert_eq!(k.rays, 2073600);
+    assert_eq!(
+        (k.wall_best, k.wall_median, k.cpu_best, k.cpu_median),
+        (23.22, 23.15, 23.22, 23.21)
+    );
+    let k = p.kernel(Workload::PrimaryHits, 1).unwrap();
+    assert_eq!((k.rays, k.wall_best, k.cpu_median), (201702, 5.38, 5.23));
+    assert!(p.kernel(Workload::PrimaryHits, 16).is_none());
+    assert_eq!(p.kernel(Workload::Shadow, 16).unwrap().wall_best, 7.75);
+    assert_eq!(p.kernel(Workload::Incoherent, 1).unwrap().cpu_best, 4.72);
+    assert_eq!(p.primary_hits, Some(201702));
+    assert_eq!(p.mismatches, Some(0));
+    assert_eq!(p.occluded, Some(61028));
+    assert_eq!(p.incoherent_hits, Some(26102));
+
+    // `--quality both`: only the first quality (MEDIUM) is kept
+    let both = format!(
+        "{SAMPLE}build HIGH (threads 1): wall best 20.00 ms, median 21.00 ms | process cpu best 1 ms, median 1 ms\n{}",
+        SAMPLE
+            .lines()
+            .skip(4)
+            .collect::<Vec<_>>()
+            .join("\n")
+            .replace("15.63", "99.00")
+    );
+    let p2 = bench::parse_peer(&both).unwrap();
+    assert_eq!(p2, p);
+
+    // not rt-bench output
+    assert!(bench::parse_peer("usage: rt-bench MESH ...\n").is_err());
+    assert!(bench::parse_peer("  primary rtcIntersect1  12 rays  wall best x med\n").is_err());
+}
+
+#[test]
+fn peer_lookup_prefers_the_explicit_path() {
+    let p = std::path::Path::new("/nonexistent/rt-bench");
+    assert_eq!(bench::find_peer(Some(p)).as_deref(), Some(p));
+}
