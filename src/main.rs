@@ -95,6 +95,12 @@ struct RenderArgs {
     /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
+    /// packet (wavefront renderer on 8-wide packets, default) or scalar (the reference).
+    #[arg(long, default_value = "packet")]
+    engine: String,
+    /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
+    #[arg(long)]
+    stats: bool,
 }
 
 fn set_threads(threads: Option<usize>) -> Result<()> {
@@ -105,6 +111,16 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
             .map_err(|e| Error::Usage(format!("--threads {n}: {e}")))?;
     }
     Ok(())
+}
+
+fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
+    match name {
+        "packet" => Ok(whitted::trace::Engine::Packet),
+        "scalar" => Ok(whitted::trace::Engine::Scalar),
+        e => Err(Error::Usage(format!(
+            "unknown engine '{e}' (packet, scalar)"
+        ))),
+    }
 }
 
 fn check_subdivide(k: u32) -> Result<()> {
@@ -118,16 +134,8 @@ fn check_subdivide(k: u32) -> Result<()> {
 }
 
 fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
-    use whitted::trace::{Engine, trace_rays};
-    let engine = match args.engine.as_str() {
-        "packet" => Engine::Packet,
-        "scalar" => Engine::Scalar,
-        e => {
-            return Err(Error::Usage(format!(
-                "unknown engine '{e}' (packet, scalar)"
-            )));
-        }
-    };
+    use whitted::trace::trace_rays;
+    let engine = parse_engine(&args.engine)?;
     check_subdivide(args.subdivide)?;
     set_threads(args.threads)?;
     let (mesh, warnings) = whitted::io::load_mesh(&args.mesh)?;
@@ -255,6 +263,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         )));
     }
     check_subdivide(args.subdivide)?;
+    let engine = parse_engine(&args.engine)?;
     set_threads(args.threads)?;
 
     let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))?;
@@ -269,6 +278,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         stage,
         depth: args.depth,
         spp: args.spp,
+        engine,
     };
     let (w, h) = (world.scene.width, world.scene.height);
     let bar = if args.quiet {
@@ -307,5 +317,57 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             out.display()
         );
     }
+    if args.stats {
+        print_stats(&world, &stats, engine);
+    }
     Ok(())
+}
+
+/// `--stats`: BVH build, rays per queue, time and Mrays/s per phase (thread time, summed over
+/// worker threads, so per-phase Mrays/s is per thread), total.
+fn print_stats(
+    world: &World,
+    stats: &whitted::render::RenderStats,
+    engine: whitted::trace::Engine,
+) {
+    let r = &stats.rays;
+    let load = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed);
+    let (primary, shadow, refl, refr) = (
+        load(&r.primary),
+        load(&r.shadow),
+        load(&r.reflection),
+        load(&r.refraction),
+    );
+    println!("engine            {engine:?}");
+    println!(
+        "BVH build         {:.1} ms ({} triangles, depth {})",
+        world.accel.build_time.as_secs_f64() * 1e3,
+        world.accel.tris.len(),
+        world.accel.depth
+    );
+    println!(
+        "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
+    );
+    if engine == whitted::trace::Engine::Packet {
+        let rays_of = [primary, primary + refl + refr, shadow, refl + refr];
+        for (k, name) in whitted::render::RenderStats::PHASES.iter().enumerate() {
+            let secs = load(&stats.phase_ns[k]) as f64 * 1e-9;
+            let what = if *name == "shade" {
+                "hits+misses shaded"
+            } else {
+                "rays"
+            };
+            println!(
+                "phase {name:<11} {secs:8.3} thread-s  {:8.2} M{what}/thread-s",
+                rays_of[k] as f64 / secs.max(1e-12) / 1e6
+            );
+        }
+    } else {
+        println!("phases            (only the packet engine times its phases)");
+    }
+    let secs = stats.time.as_secs_f64();
+    println!(
+        "total             {secs:.3} s wall, {:.2} Mrays/s",
+        r.total() as f64 / secs.max(1e-12) / 1e6
+    );
 }

@@ -1,6 +1,10 @@
 //! Rendering: the world (scene + geometry + BVH), stages, tiles, statistics.
 
+pub mod queues;
 pub mod recursive;
+pub mod wavefront;
+
+pub use crate::trace::Engine;
 
 use crate::accel::{Accel, BuildQuality};
 use crate::camera::sample_offsets;
@@ -77,6 +81,8 @@ pub struct Settings {
     pub depth: Option<u32>,
     /// Samples per pixel (stratified, deterministic).
     pub spp: u32,
+    /// Wavefront on packets (default) or the scalar recursive reference.
+    pub engine: Engine,
 }
 
 impl Default for Settings {
@@ -85,6 +91,7 @@ impl Default for Settings {
             stage: None,
             depth: None,
             spp: 1,
+            engine: Engine::Packet,
         }
     }
 }
@@ -156,12 +163,20 @@ impl RayCounts {
 pub struct RenderStats {
     pub rays: RayCounts,
     pub time: Duration,
+    /// Summed thread time (ns) per phase: primary intersection, shading, shadow rays,
+    /// secondary intersection (wavefront engine only).
+    pub phase_ns: [AtomicU64; 4],
+}
+
+impl RenderStats {
+    pub const PHASES: [&'static str; 4] = ["primary", "shade", "shadow", "secondary"];
 }
 
 /// Tile edge in pixels: small enough to balance threads, big enough for coherent packets.
 pub const TILE: u32 = 16;
 
-/// Render `world` with the scalar reference engine (`recursive::trace1` per sample).
+/// Render `world` over tiles in parallel with the engine of `settings`: the wavefront
+/// renderer on packets, or the scalar reference (`recursive::trace1` per sample).
 /// `progress(pixels)` is called as tiles finish.
 pub fn render(
     world: &World,
@@ -178,7 +193,12 @@ pub fn render(
     let results: Vec<((u32, u32), Vec<Vec3>)> = tiles
         .par_iter()
         .map(|&(x0, y0)| {
-            let pixels = recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays);
+            let pixels = match settings.engine {
+                Engine::Packet => wavefront::render_tile(world, settings, &offsets, x0, y0, &stats),
+                Engine::Scalar => {
+                    recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays)
+                }
+            };
             progress(pixels.len() as u64);
             ((x0, y0), pixels)
         })

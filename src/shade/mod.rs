@@ -2,6 +2,10 @@
 //!
 //! `I = Ia ka Od + sum_i S_i Ip_i [kd Od max(<N,l_i>,0) + ks max(<v,r_i>,0)^n] + ks Ir + kt It`
 
+pub mod packet;
+
+pub use packet::{Shade8, shade8};
+
 use crate::accel::occluded1;
 use crate::ray::{Hit, Ray, offset_origin, reflect, refract};
 use crate::render::{Terms, World};

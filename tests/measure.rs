@@ -1,0 +1,95 @@
+//! Measurements behind two design choices (not assertions; run on demand):
+//!
+//! ```sh
+//! WHITTED_ASSETS=../shared cargo test --release --test measure -- --ignored --nocapture
+//! ```
+//!
+//! 1. obvhs build preset: build time (kitten, bunny, subdivided kittens) and the packet
+//!    engine's primary-ray throughput on the resulting tree.
+//! 2. camera packet shape: 4x2 pixel blocks against 8x1 rows.
+
+mod common;
+
+use glam::Vec3;
+use std::time::Instant;
+use whitted::accel::{Accel, BuildQuality, intersect8};
+use whitted::camera::Camera;
+use whitted::io::load_mesh;
+use whitted::packet::{PacketShape, camera_packet};
+
+fn tris_of(name: &str, subdivide: u32) -> Vec<[Vec3; 3]> {
+    let (m, _) = load_mesh(&common::assets().join("meshes").join(name)).unwrap();
+    let m = m.subdivide(subdivide);
+    m.triangles
+        .iter()
+        .map(|t| t.map(|i| m.positions[i as usize]))
+        .collect()
+}
+
+/// Single-threaded primary rays of the canonical camera at 1920x1080, in packets of `shape`.
+fn primary_mrays(accel: &Accel, shape: PacketShape) -> (f64, usize) {
+    let (w, h) = (1920, 1080);
+    let cam = Camera::new(
+        Vec3::new(1.6, 0.9, 4.4),
+        Vec3::new(0.0, -0.15, 0.0),
+        Vec3::Y,
+        36.0,
+        w,
+        h,
+    );
+    let (pw, ph) = shape.size();
+    let mut best = f64::MAX;
+    let mut hits = 0;
+    for _ in 0..3 {
+        let start = Instant::now();
+        hits = 0;
+        for y in (0..h).step_by(ph as usize) {
+            for x in (0..w).step_by(pw as usize) {
+                let (p, active) = camera_packet(&cam, shape, x, y, 0.5, 0.5);
+                let hp = intersect8(accel, &p, active, false);
+                hits += whitted::simd::bitmask(hp.hit_mask()).count_ones() as usize;
+            }
+        }
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    ((w * h) as f64 / best / 1e6, hits)
+}
+
+#[test]
+#[ignore]
+fn build_presets() {
+    println!("| mesh | triangles | preset | build ms | primary packet Mrays/s (1 thread) |");
+    println!("|---|---|---|---|---|");
+    for (name, sub) in [
+        ("kitten.m", 0),
+        ("stanford-bunny.obj", 0),
+        ("kitten.m", 1),
+        ("kitten.m", 2),
+        ("kitten.m", 3),
+    ] {
+        let tris = tris_of(name, sub);
+        for q in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::Slow] {
+            let a = Accel::build(&tris, q);
+            let speed = if name == "kitten.m" {
+                format!("{:.1}", primary_mrays(&a, PacketShape::Block4x2).0)
+            } else {
+                "-".into()
+            };
+            println!(
+                "| {name} sub {sub} | {} | {q:?} | {:.1} | {speed} |",
+                tris.len(),
+                a.build_time.as_secs_f64() * 1e3
+            );
+        }
+    }
+}
+
+#[test]
+#[ignore]
+fn packet_shapes() {
+    let a = Accel::build(&tris_of("kitten.m", 0), BuildQuality::Medium);
+    for shape in [PacketShape::Block4x2, PacketShape::Row8x1] {
+        let (mrays, hits) = primary_mrays(&a, shape);
+        println!("{shape:?}: {mrays:.1} Mrays/s ({hits} hits)");
+    }
+}
