@@ -1,80 +1,60 @@
-//! Intersection throughput on the kitten: the canonical camera's primary rays (1920x1080, no
-//! floor, ~90% miss, as in the Embree peer's `primary` workload), scalar vs packet engine.
-//! A checksum of the hits is asserted outside the timed loop. Needs `WHITTED_ASSETS`.
+//! Intersection throughput on the kitten, on the Embree peer's workloads (`whitted::bench`):
+//! primary (1920x1080 in 4x4 pixel blocks, ~90% miss), primary-hits-only, shadow (any hit)
+//! and incoherent, for the scalar (`intersect1`/`occluded1`) and packet (`intersect8`/
+//! `occluded8`, 8 consecutive rays) engines, single-threaded. The hit count and a checksum of
+//! the results are asserted outside the timed loop. Needs `WHITTED_ASSETS` (or `../shared`).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::Vec3;
 use std::path::PathBuf;
+use std::time::Duration;
 use whitted::accel::{Accel, BuildQuality};
-use whitted::camera::Camera;
-use whitted::ray::Ray;
-use whitted::trace::{Engine, trace_rays};
+use whitted::bench::{Engine, Out, Packets, Workload, Workloads, pass, triangles};
 
-fn kitten() -> Accel {
-    let dir = std::env::var_os("WHITTED_ASSETS")
+fn assets() -> PathBuf {
+    std::env::var_os("WHITTED_ASSETS")
         .map(|v| std::env::split_paths(&v).next().unwrap())
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    let (mesh, _) =
-        whitted::io::load_mesh(&dir.join("meshes/kitten.m")).expect("kitten.m via WHITTED_ASSETS");
-    let tris: Vec<[Vec3; 3]> = mesh
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| mesh.positions[i as usize]))
-        .collect();
-    Accel::build(&tris, BuildQuality::Medium)
-}
-
-/// Primary rays in 4x2 pixel blocks (packet lanes are neighbouring pixels).
-fn primary_rays(w: u32, h: u32) -> Vec<Ray> {
-    let cam = Camera::new(
-        Vec3::new(1.6, 0.9, 4.4),
-        Vec3::new(0.0, -0.15, 0.0),
-        Vec3::Y,
-        36.0,
-        w,
-        h,
-    );
-    let mut rays = Vec::with_capacity((w * h) as usize);
-    for by in (0..h).step_by(2) {
-        for bx in (0..w).step_by(4) {
-            for k in 0..8 {
-                let (x, y) = (bx + k % 4, by + k / 4);
-                if x < w && y < h {
-                    rays.push(cam.primary_ray(x, y));
-                }
-            }
-        }
-    }
-    rays
-}
-
-fn checksum(hits: &[Option<whitted::ray::Hit>]) -> (usize, u64) {
-    let n = hits.iter().flatten().count();
-    (n, hits.iter().flatten().map(|h| h.tri as u64).sum())
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"))
 }
 
 fn bench(c: &mut Criterion) {
-    let accel = kitten();
-    let rays = primary_rays(1920, 1080);
-    let reference = checksum(&trace_rays(&accel, &rays, Engine::Scalar, false));
-    assert!(
-        reference.0 > 150_000,
-        "about 10% of primary rays hit the kitten"
-    );
-    let mut g = c.benchmark_group("primary");
-    g.throughput(Throughput::Elements(rays.len() as u64));
-    g.sample_size(10);
-    for (name, engine) in [("scalar", Engine::Scalar), ("packet8", Engine::Packet)] {
-        assert_eq!(
-            checksum(&trace_rays(&accel, &rays, engine, false)),
-            reference,
-            "{name}"
+    let (mesh, _) = whitted::io::load_mesh(&assets().join("meshes/kitten.m"))
+        .expect("kitten.m via WHITTED_ASSETS");
+    let accel = Accel::build(&triangles(&mesh), BuildQuality::default());
+    let work = Workloads::generate(&mesh, &accel, whitted::bench::WIDTH, whitted::bench::HEIGHT);
+    for (workload, rays) in work.sets() {
+        let packets = Packets::new(rays);
+        let any = workload.any_hit();
+        // checksum: both engines give the same results, with the peer's counts on the kitten
+        let mut reference = Out::new(Engine::Scalar, any, rays);
+        pass(&accel, rays, &packets, &mut reference, None);
+        let reference = reference.results(rays.len());
+        let expect = match workload {
+            Workload::Primary | Workload::PrimaryHits => 201702,
+            Workload::Shadow => 61028,
+            Workload::Incoherent => 26102,
+        };
+        assert!(
+            reference.count().abs_diff(expect) <= 5,
+            "{}: {} hits",
+            workload.name(),
+            reference.count()
         );
-        g.bench_function(name, |b| {
-            b.iter(|| trace_rays(&accel, &rays, engine, false))
-        });
+        let mut g = c.benchmark_group(workload.name());
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.sample_size(10);
+        g.warm_up_time(Duration::from_millis(500));
+        g.measurement_time(Duration::from_secs(2));
+        for engine in [Engine::Scalar, Engine::Packet] {
+            let mut out = Out::new(engine, any, rays);
+            pass(&accel, rays, &packets, &mut out, None);
+            let got = out.results(rays.len());
+            assert_eq!(got.checksum(), reference.checksum(), "{}", engine.name());
+            g.bench_function(engine.name(), |b| {
+                b.iter(|| pass(&accel, rays, &packets, &mut out, None))
+            });
+        }
+        g.finish();
     }
-    g.finish();
 }
 
 criterion_group!(benches, bench);

@@ -451,8 +451,10 @@ impl Results {
     }
 }
 
-/// Output buffers of one engine on one set, written in place by every pass.
-enum Out {
+/// Output buffers of one engine on one set, written in place by every pass (as the peer
+/// writes its result arrays): per ray `(triangle, t)` or occlusion, per packet a
+/// `HitPacket8` or an occlusion bitmask.
+pub enum Out {
     Hits(Vec<(u32, f32)>),
     Occ(Vec<bool>),
     Hits8(Vec<HitPacket8>),
@@ -503,7 +505,7 @@ fn occ8(accel: &Accel, rays: &[RayPacket8], active: &[M32x8], out: &mut [u8]) {
 
 /// One pass of an engine over a set, in place; with a pool, chunks of [`CHUNK`] rays in
 /// parallel (the peer's threads pull 4096-ray chunks from a shared counter).
-fn pass(
+pub fn pass(
     accel: &Accel,
     rays: &[Ray],
     packets: &Packets,
@@ -539,6 +541,24 @@ fn pass(
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
             .for_each(|(o, (r, a))| occ8(accel, r, a, o)),
     })
+}
+
+impl Out {
+    /// Buffers for `engine` on `rays`, closest hit or any hit.
+    pub fn new(engine: Engine, any_hit: bool, rays: &[Ray]) -> Out {
+        let packets = rays.len().div_ceil(8);
+        match (engine, any_hit) {
+            (Engine::Scalar, false) => Out::Hits(vec![(0, 0.0); rays.len()]),
+            (Engine::Scalar, true) => Out::Occ(vec![false; rays.len()]),
+            (Engine::Packet, false) => Out::Hits8(vec![HitPacket8::none(); packets]),
+            (Engine::Packet, true) => Out::Occ8(vec![0; packets]),
+        }
+    }
+
+    /// The results of the last pass over `n` rays.
+    pub fn results(&self, n: usize) -> Results {
+        results_of(self, n)
+    }
 }
 
 fn results_of(out: &Out, n: usize) -> Results {
@@ -670,12 +690,7 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
     for (workload, rays) in work.sets() {
         let packets = Packets::new(rays);
         for engine in [Engine::Scalar, Engine::Packet] {
-            let mut out = match (engine, workload.any_hit()) {
-                (Engine::Scalar, false) => Out::Hits(vec![(0, 0.0); rays.len()]),
-                (Engine::Scalar, true) => Out::Occ(vec![false; rays.len()]),
-                (Engine::Packet, false) => Out::Hits8(vec![HitPacket8::none(); packets.rays.len()]),
-                (Engine::Packet, true) => Out::Occ8(vec![0; packets.rays.len()]),
-            };
+            let mut out = Out::new(engine, workload.any_hit(), rays);
             let timing = time_reps(reps, threads, || {
                 pass(accel, rays, &packets, &mut out, pool.as_ref())
             });
