@@ -115,7 +115,7 @@ pub fn u32_from_lanes(a: [u32; 8]) -> U32x8 {
 }
 
 /// Eight 3-vectors in SoA form.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Vec3x8 {
     pub x: F32x8,
     pub y: F32x8,
@@ -159,6 +159,22 @@ impl Vec3x8 {
     #[inline(always)]
     pub fn lane(&self, i: usize) -> [f32; 3] {
         [lanes(self.x)[i], lanes(self.y)[i], lanes(self.z)[i]]
+    }
+    /// All lanes at once: `[x lanes, y lanes, z lanes]` (one conversion instead of 8 `lane` calls).
+    #[inline(always)]
+    pub fn to_lanes(&self) -> [[f32; 8]; 3] {
+        [lanes(self.x), lanes(self.y), lanes(self.z)]
+    }
+    /// Lanes `start .. start + 8` of three SoA arrays; lanes past the end are `pad`.
+    #[inline(always)]
+    pub fn load(a: &[Vec<f32>; 3], start: usize, pad: f32) -> Self {
+        let get = |v: &Vec<f32>| {
+            let mut out = [pad; 8];
+            let end = (start + 8).min(v.len());
+            out[..end - start].copy_from_slice(&v[start..end]);
+            from_lanes(out)
+        };
+        Vec3x8::new(get(&a[0]), get(&a[1]), get(&a[2]))
     }
     pub fn from_fn(f: impl Fn(usize) -> [f32; 3]) -> Self {
         let v: [[f32; 3]; 8] = std::array::from_fn(f);

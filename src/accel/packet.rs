@@ -41,15 +41,12 @@ pub fn hit_triangle8(
     if simd::none(mask) {
         return (mask, t, t, t);
     }
-    // barycentric: signed sub-triangle areas over the whole, inside when none is negative.
+    // barycentric: signed sub-triangle areas over the whole, as linear forms of w = q - v0.
     let q = rays.o + rays.d * t;
-    let a = v0 - q;
-    let b = Vec3x8::splat(tri.v1(i)) - q;
-    let c = Vec3x8::splat(tri.v2(i)) - q;
-    let inv = simd::splat(tri.inv_nn[i]);
-    let b0 = b.cross(c).dot(n) * inv;
-    let b1 = c.cross(a).dot(n) * inv;
-    let b2 = a.cross(b).dot(n) * inv;
+    let w = q - v0;
+    let b1 = w.dot(Vec3x8::splat(tri.p1(i)));
+    let b2 = w.dot(Vec3x8::splat(tri.p2(i)));
+    let b0 = simd::splat(1.0) - b1 - b2;
     // inside when no coordinate is negative: clear lanes here, lanes within BARY_SAFE of an
     // edge by the f64 edge signs, exactly as hit_triangle1 does.
     let dlen = simd::sqrt(rays.d.dot(rays.d));

@@ -16,14 +16,6 @@ fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
 fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-#[inline(always)]
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// The plane + barycentric test against SoA slot `i`; `Some((t, b1, b2))` when the ray hits
 /// with `tnear < t < tfar`. Steps (identical in the 8-wide kernel):
@@ -53,15 +45,12 @@ pub fn hit_triangle1(
         return None;
     }
     // barycentric: q = p + t d; each weight is the signed area of the sub-triangle opposite
-    // its vertex over the whole area, <cross(.., ..), n> / <n, n>.
+    // its vertex over the whole area, precomputed as a linear form of w = q - v0 (tri_soa.rs).
     let q = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
-    let a = sub(v0, q);
-    let b = sub(tri.v1(i), q);
-    let c = sub(tri.v2(i), q);
-    let inv = tri.inv_nn[i];
-    let b0 = dot(cross(b, c), n) * inv;
-    let b1 = dot(cross(c, a), n) * inv;
-    let b2 = dot(cross(a, b), n) * inv;
+    let w = sub(q, v0);
+    let b1 = dot(w, tri.p1(i));
+    let b2 = dot(w, tri.p2(i));
+    let b0 = 1.0 - b1 - b2;
     // inside when no coordinate is negative (NaN fails >= and so misses). Clear cases are
     // decided here; within BARY_SAFE of an edge the f32 areas are rounding noise, so the
     // edge signs are decided exactly-enough in f64 (the same call in the packet kernel).

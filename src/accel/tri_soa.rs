@@ -4,7 +4,10 @@ use glam::Vec3;
 
 /// What the plane + barycentric test needs, one array per component, in BVH order:
 /// the vertices, the plane normal `n = cross(v1 - v0, v2 - v0)` (unnormalised: twice the
-/// area, CCW = front) and `1 / <n, n>` to turn sub-triangle areas into barycentrics.
+/// area, CCW = front), and the sub-triangle areas precomputed as linear forms of
+/// `w = q - v0`: the area opposite `v1` over the whole is
+/// `<cross(v2 - q, v0 - q), n> / <n, n> = <w, cross(e2, n) / <n, n>> = <w, p1>`, and the area
+/// opposite `v2` is `<w, cross(n, e1) / <n, n>> = <w, p2>` (`e1 = v1 - v0`, `e2 = v2 - v0`).
 /// `prim[slot]` is the triangle's index in the scene's original order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleSoa {
@@ -12,7 +15,8 @@ pub struct TriangleSoa {
     pub v1: [Vec<f32>; 3],
     pub v2: [Vec<f32>; 3],
     pub n: [Vec<f32>; 3],
-    pub inv_nn: Vec<f32>,
+    pub p1: [Vec<f32>; 3],
+    pub p2: [Vec<f32>; 3],
     /// `|n|`, to scale the barycentric safety margin by how grazing a ray is.
     pub n_len: Vec<f32>,
     pub prim: Vec<u32>,
@@ -27,30 +31,32 @@ impl TriangleSoa {
     pub fn new(tris: &[[Vec3; 3]], order: &[u32]) -> Self {
         let mut s = TriangleSoa::default();
         let len = order.len();
-        for a in [&mut s.v0, &mut s.v1, &mut s.v2, &mut s.n] {
+        for a in [
+            &mut s.v0, &mut s.v1, &mut s.v2, &mut s.n, &mut s.p1, &mut s.p2,
+        ] {
             for c in a.iter_mut() {
                 c.reserve_exact(len);
             }
         }
-        s.inv_nn.reserve_exact(len);
         s.n_len.reserve_exact(len);
         s.prim.reserve_exact(len);
         for &p in order {
             let [a, b, c] = tris[p as usize];
             let n = (b - a).cross(c - a);
             let nn = n.dot(n);
-            let (n, inv) = if nn.is_finite() && nn >= f32::MIN_POSITIVE {
-                (n, 1.0 / nn)
+            let (n, p1, p2) = if nn.is_finite() && nn >= f32::MIN_POSITIVE {
+                (n, (c - a).cross(n) / nn, n.cross(b - a) / nn)
             } else {
-                (Vec3::ZERO, 0.0)
+                (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO)
             };
             for k in 0..3 {
                 s.v0[k].push(a[k]);
                 s.v1[k].push(b[k]);
                 s.v2[k].push(c[k]);
                 s.n[k].push(n[k]);
+                s.p1[k].push(p1[k]);
+                s.p2[k].push(p2[k]);
             }
-            s.inv_nn.push(inv);
             s.n_len.push(n.length());
             s.prim.push(p);
         }
@@ -80,5 +86,13 @@ impl TriangleSoa {
     #[inline(always)]
     pub fn n(&self, i: usize) -> [f32; 3] {
         [self.n[0][i], self.n[1][i], self.n[2][i]]
+    }
+    #[inline(always)]
+    pub fn p1(&self, i: usize) -> [f32; 3] {
+        [self.p1[0][i], self.p1[1][i], self.p1[2][i]]
+    }
+    #[inline(always)]
+    pub fn p2(&self, i: usize) -> [f32; 3] {
+        [self.p2[0][i], self.p2[1][i], self.p2[2][i]]
     }
 }

@@ -2,7 +2,7 @@
 
 use crate::packet::RayPacket8;
 use crate::ray::Ray;
-use crate::simd::{self, LANES, M32x8};
+use crate::simd::{self, LANES, M32x8, Vec3x8};
 use glam::Vec3;
 
 /// Rays waiting for a closest-hit query (camera, reflection or refraction rays), each with
@@ -52,14 +52,31 @@ impl RayQueue {
         Vec3::new(self.weight[0][i], self.weight[1][i], self.weight[2][i])
     }
 
-    /// Entries `start .. start + 8` as a packet (missing lanes inactive).
+    /// Entries `start .. start + 8` as a packet (missing lanes inactive), loaded straight
+    /// from the SoA arrays.
     pub fn packet(&self, start: usize) -> (RayPacket8, M32x8) {
-        RayPacket8::from_fn(|i| (start + i < self.len()).then(|| self.ray(start + i)))
+        let n = (self.len() - start).min(LANES);
+        let packet = RayPacket8 {
+            o: Vec3x8::load(&self.o, start, 0.0),
+            d: Vec3x8::load(&self.d, start, 1.0),
+            tnear: simd::splat(0.0),
+            tfar: simd::splat(f32::INFINITY),
+        };
+        (packet, simd::mask_from_bits((1u32 << n) - 1))
+    }
+
+    /// Make room for `n` entries without reallocating.
+    pub fn reserve(&mut self, n: usize) {
+        for v in self.o.iter_mut().chain(&mut self.d).chain(&mut self.weight) {
+            v.reserve(n);
+        }
+        self.pixel.reserve(n);
+        self.depth.reserve(n);
     }
 
     /// Reorder entries so rays with the same direction octant are adjacent (repacking for
-    /// coherence). A stable counting sort over the 3 sign bits.
-    pub fn bin_by_octant(&mut self) {
+    /// coherence). A stable counting sort over the 3 sign bits; `spare` is scratch space.
+    pub fn bin_by_octant(&mut self, spare: &mut RayQueue) {
         let oct = |i: usize| (0..3).fold(0usize, |b, k| b | ((self.d[k][i] < 0.0) as usize) << k);
         let mut counts = [0usize; 9];
         for i in 0..self.len() {
@@ -68,18 +85,30 @@ impl RayQueue {
         for b in 0..8 {
             counts[b + 1] += counts[b];
         }
-        let mut order = vec![0usize; self.len()];
+        spare.clear();
+        for v in spare
+            .o
+            .iter_mut()
+            .chain(&mut spare.d)
+            .chain(&mut spare.weight)
+        {
+            v.resize(self.len(), 0.0);
+        }
+        spare.pixel.resize(self.len(), 0);
+        spare.depth.resize(self.len(), 0);
         for i in 0..self.len() {
             let b = oct(i);
-            order[counts[b]] = i;
+            let j = counts[b];
             counts[b] += 1;
+            for k in 0..3 {
+                spare.o[k][j] = self.o[k][i];
+                spare.d[k][j] = self.d[k][i];
+                spare.weight[k][j] = self.weight[k][i];
+            }
+            spare.pixel[j] = self.pixel[i];
+            spare.depth[j] = self.depth[i];
         }
-        let permute_f = |v: &mut Vec<f32>| *v = order.iter().map(|&i| v[i]).collect();
-        for v in self.o.iter_mut().chain(&mut self.d).chain(&mut self.weight) {
-            permute_f(v);
-        }
-        self.pixel = order.iter().map(|&i| self.pixel[i]).collect();
-        self.depth = order.iter().map(|&i| self.depth[i]).collect();
+        std::mem::swap(self, spare);
     }
 }
 
@@ -134,24 +163,17 @@ impl ShadowQueue {
     }
 
     pub fn packet(&self, start: usize) -> (RayPacket8, M32x8) {
-        RayPacket8::from_fn(|i| {
-            let j = start + i;
-            (j < self.len()).then(|| {
-                let v = |a: &[Vec<f32>; 3]| Vec3::new(a[0][j], a[1][j], a[2][j]);
-                Ray::new(v(&self.o), v(&self.d), 0.0, self.tfar[j])
-            })
-        })
+        let n = (self.len() - start).min(LANES);
+        let mut tfar = [0.0f32; LANES];
+        tfar[..n].copy_from_slice(&self.tfar[start..start + n]);
+        let packet = RayPacket8 {
+            o: Vec3x8::load(&self.o, start, 0.0),
+            d: Vec3x8::load(&self.d, start, 1.0),
+            tnear: simd::splat(0.0),
+            tfar: simd::from_lanes(tfar),
+        };
+        (packet, simd::mask_from_bits((1u32 << n) - 1))
     }
-}
-
-/// Lanes of a packet as an index range helper.
-pub fn lanes_from(start: usize, len: usize) -> impl Iterator<Item = usize> {
-    (0..LANES).filter(move |&i| start + i < len)
-}
-
-/// Whether lane `i` of `m` is set (re-exported for the wavefront loop's readability).
-pub fn set(m: M32x8, i: usize) -> bool {
-    simd::lane_set(m, i)
 }
 
 #[cfg(test)]
@@ -176,7 +198,7 @@ mod tests {
                 1,
             );
         }
-        q.bin_by_octant();
+        q.bin_by_octant(&mut RayQueue::default());
         assert_eq!(q.pixel, vec![0, 2, 1, 4, 3]);
         assert_eq!(q.ray(1).dir, Vec3::ONE);
         let (p, active) = q.packet(0);

@@ -11,15 +11,17 @@ use super::{RenderStats, Settings, TILE, Terms, World};
 use crate::accel::{intersect8, occluded8};
 use crate::camera::Camera;
 use crate::packet::{HitPacket8, PacketShape};
-use crate::shade::{SecondaryKind, shade8};
+use crate::shade::{SecondaryKind, Shade8, shade8};
 use crate::simd::{self, LANES};
 use glam::Vec3;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Sort reflection/refraction queues by direction octant before packing them into packets.
-/// Measured on `refraction` at 1024x768: see the README ("Wavefront renderer").
-pub const BIN_SECONDARY: bool = true;
+/// Tried and measured: on `refraction` at 512x384, 1 thread, 1.01-1.03 s with binning and
+/// 0.97-1.07 s without (noise); the secondary rays of one glass object are coherent enough
+/// as they are queued (pixel order). Off; `RayQueue::bin_by_octant` stays for other scenes.
+pub const BIN_SECONDARY: bool = false;
 
 /// Render the tile with corner `(x0, y0)`; pixels row-major within the tile.
 pub fn render_tile(
@@ -43,6 +45,11 @@ pub fn render_tile(
         RayQueue::default(),
         ShadowQueue::default(),
     );
+    let mut spare = RayQueue::default();
+    let mut hits = Vec::new();
+    let mut scratch = Scratch::default();
+    rays.reserve(accum.len() * offsets.len());
+    next.reserve(accum.len() * offsets.len() * 2);
     let mut counts = [0u64; 4];
     let mut phase_ns = [0u64; 4];
 
@@ -51,7 +58,7 @@ pub fn render_tile(
     let mut generation = 0;
     while !rays.is_empty() {
         let start = Instant::now();
-        let hits = intersect_closest(world, &rays);
+        intersect_closest(world, &rays, &mut hits);
         phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
 
         let start = Instant::now();
@@ -65,6 +72,7 @@ pub fn render_tile(
             &mut shadows,
             &mut next,
             &mut counts,
+            &mut scratch,
         );
         phase_ns[1] += start.elapsed().as_nanos() as u64;
 
@@ -77,7 +85,7 @@ pub fn render_tile(
         std::mem::swap(&mut rays, &mut next);
         next.clear();
         if BIN_SECONDARY {
-            rays.bin_by_octant();
+            rays.bin_by_octant(&mut spare);
         }
         generation += 1;
     }
@@ -130,25 +138,35 @@ fn generate_camera_rays(
 }
 
 /// Closest hits of every queued ray, 8 consecutive entries per packet.
-fn intersect_closest(world: &World, rays: &RayQueue) -> Vec<HitPacket8> {
-    (0..rays.len())
-        .step_by(LANES)
-        .map(|start| {
-            let (packet, active) = rays.packet(start);
-            intersect8(&world.accel, &packet, active, world.scene.cull_backfaces)
-        })
-        .collect()
+fn intersect_closest(world: &World, rays: &RayQueue, out: &mut Vec<HitPacket8>) {
+    out.clear();
+    out.extend((0..rays.len()).step_by(LANES).map(|start| {
+        let (packet, active) = rays.packet(start);
+        intersect8(&world.accel, &packet, active, world.scene.cull_backfaces)
+    }));
+}
+
+/// One light's lanes of a shaded packet as plain arrays: lit bits, shadow-ray origin,
+/// direction, tfar, and the contribution.
+type LightArrays = (u32, [[f32; 8]; 3], [[f32; 8]; 3], [f32; 8], [[f32; 8]; 3]);
+
+/// Buffers reused by `shade_hits` from packet to packet.
+#[derive(Default)]
+struct Scratch {
+    shade: Shade8,
+    /// Per light: lit lanes, origin, direction, tfar, contribution, as lane arrays.
+    lights: Vec<LightArrays>,
 }
 
 /// Rays that hit nothing take the background, times their weight.
 fn handle_escaped_rays(world: &World, rays: &RayQueue, hits: &[HitPacket8], accum: &mut [Vec3]) {
     for (p, h) in hits.iter().enumerate() {
-        for i in 0..LANES {
-            let j = p * LANES + i;
-            if j < rays.len() && h.lane(i).is_none() {
-                accum[rays.pixel[j] as usize] +=
-                    rays.weight(j) * world.scene.background.sample(rays.ray(j).dir);
-            }
+        let start = p * LANES;
+        let missed = !simd::bitmask(h.hit_mask()) & ((1u32 << (rays.len() - start).min(LANES)) - 1);
+        for i in (0..LANES).filter(|&i| missed >> i & 1 == 1) {
+            let j = start + i;
+            accum[rays.pixel[j] as usize] +=
+                rays.weight(j) * world.scene.background.sample(rays.ray(j).dir);
         }
     }
 }
@@ -165,37 +183,54 @@ fn shade_hits(
     shadows: &mut ShadowQueue,
     next: &mut RayQueue,
     counts: &mut [u64; 4],
+    scratch: &mut Scratch,
 ) {
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
         let mask = h.hit_mask();
-        if simd::none(mask) {
+        let bits = simd::bitmask(mask);
+        if bits == 0 {
             continue;
         }
-        let lanes: Vec<usize> = (0..LANES).filter(|&i| simd::lane_set(mask, i)).collect();
+        let lanes = (0..LANES).filter(move |&i| bits >> i & 1 == 1);
         if terms.white {
-            for &i in &lanes {
+            for i in lanes {
                 accum[rays.pixel[start + i] as usize] += rays.weight(start + i);
             }
             continue;
         }
         let (packet, _) = rays.packet(start);
         let depth = std::array::from_fn(|i| rays.depth.get(start + i).copied().unwrap_or(0));
-        let s = shade8(world, terms, &packet, h, mask, depth);
-        for &i in &lanes {
+        shade8(world, terms, &packet, h, mask, depth, &mut scratch.shade);
+        let s = &scratch.shade;
+        // Lane values out of the SIMD registers once per packet.
+        let ambient = s.ambient.to_lanes();
+        scratch.lights.clear();
+        scratch.lights.extend(s.lights.iter().map(|l| {
+            (
+                simd::bitmask(l.lit),
+                l.origin.to_lanes(),
+                l.dir.to_lanes(),
+                simd::lanes(l.tfar),
+                l.contribution.to_lanes(),
+            )
+        }));
+        let lights = &scratch.lights;
+        for i in lanes {
             let j = start + i;
             let (pixel, w) = (rays.pixel[j], rays.weight(j));
-            accum[pixel as usize] += w * Vec3::from(s.ambient.lane(i));
-            for l in &s.lights {
-                if !simd::lane_set(l.lit, i) {
+            let at = |a: &[[f32; 8]; 3]| Vec3::new(a[0][i], a[1][i], a[2][i]);
+            accum[pixel as usize] += w * at(&ambient);
+            for (lit, origin, dir, tfar, contribution) in lights {
+                if lit >> i & 1 == 0 {
                     continue;
                 }
-                let c = w * Vec3::from(l.contribution.lane(i));
+                let c = w * at(contribution);
                 if terms.shadows {
                     shadows.push(
-                        l.origin.lane(i),
-                        l.dir.lane(i),
-                        simd::lanes(l.tfar)[i],
+                        at(origin).to_array(),
+                        at(dir).to_array(),
+                        tfar[i],
                         pixel,
                         c.to_array(),
                     );
@@ -216,16 +251,15 @@ fn trace_shadow_rays(world: &World, shadows: &ShadowQueue, accum: &mut [Vec3]) {
     for start in (0..shadows.len()).step_by(LANES) {
         let (packet, active) = shadows.packet(start);
         let occluded = occluded8(&world.accel, &packet, active, world.scene.cull_backfaces);
-        for i in 0..LANES {
+        let visible = simd::bitmask(active) & !simd::bitmask(occluded);
+        for i in (0..LANES).filter(|&i| visible >> i & 1 == 1) {
             let j = start + i;
-            if j < shadows.len() && !simd::lane_set(occluded, i) {
-                let c = Vec3::new(
-                    shadows.contribution[0][j],
-                    shadows.contribution[1][j],
-                    shadows.contribution[2][j],
-                );
-                accum[shadows.pixel[j] as usize] += c;
-            }
+            let c = Vec3::new(
+                shadows.contribution[0][j],
+                shadows.contribution[1][j],
+                shadows.contribution[2][j],
+            );
+            accum[shadows.pixel[j] as usize] += c;
         }
     }
 }

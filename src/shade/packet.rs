@@ -22,7 +22,8 @@ pub struct LightLanes {
     pub contribution: Vec3x8,
 }
 
-/// What shading a hit packet produces.
+/// What shading a hit packet produces (reused across packets to avoid allocating).
+#[derive(Default)]
 pub struct Shade8 {
     /// `Ia ka Od` per lane.
     pub ambient: Vec3x8,
@@ -46,7 +47,8 @@ pub fn shade8(
     hits: &HitPacket8,
     mask: M32x8,
     depth: [u32; LANES],
-) -> Shade8 {
+    out: &mut Shade8,
+) {
     let sc = &world.scene;
     // surface: per-lane gather (flat default for inactive lanes).
     let flat = Surface {
@@ -78,7 +80,7 @@ pub fn shade8(
     let v = -normalize8(rays.d);
     let zero = simd::splat(0.0);
     let eps = simd::splat(world.eps);
-    let mut lights = Vec::with_capacity(sc.lights.len());
+    out.lights.clear();
     for light in &sc.lights {
         let lp = Vec3x8::splat(light.position.to_array());
         let l = normalize8(lp - q);
@@ -105,7 +107,7 @@ pub fn shade8(
         let origin = Vec3x8::select(side, q + ng.scale(eps), q - ng.scale(eps));
         let to_light = lp - origin;
         let tfar = simd::sqrt(to_light.dot(to_light));
-        lights.push(LightLanes {
+        out.lights.push(LightLanes {
             lit,
             origin,
             dir: l,
@@ -113,16 +115,18 @@ pub fn shade8(
             contribution,
         });
     }
-    let secondaries = std::array::from_fn(|i| {
+    let dirs = rays.d.to_lanes();
+    out.ambient = ambient;
+    out.secondaries = std::array::from_fn(|i| {
         if simd::lane_set(mask, i) {
-            secondaries1(world, &surf[i], rays.lane(i).dir, depth[i])
+            secondaries1(
+                world,
+                &surf[i],
+                Vec3::new(dirs[0][i], dirs[1][i], dirs[2][i]),
+                depth[i],
+            )
         } else {
             [None, None]
         }
     });
-    Shade8 {
-        ambient,
-        lights,
-        secondaries,
-    }
 }
