@@ -943,15 +943,18 @@ impl Report {
     }
 }
 
+/// Caps of `whitted bench --subdivide` (the peer's kitten level 3 is 1.3M triangles).
+pub const MAX_SUBDIVIDE: u32 = 6;
+pub const MAX_TRIANGLES: u64 = 1 << 25;
+
 /// Load, subdivide, build, generate and time one mesh (and run the peer on it).
 pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
-    use crate::io::scene_file::{MAX_SUBDIVIDE, MAX_SUBDIVIDED_TRIANGLES};
     let (mesh, _warnings) = crate::io::load_mesh(path)?;
     if opts.subdivide > MAX_SUBDIVIDE
-        || (mesh.triangles.len() as u64) << (2 * opts.subdivide) > MAX_SUBDIVIDED_TRIANGLES
+        || (mesh.triangles.len() as u64) << (2 * opts.subdivide.min(MAX_SUBDIVIDE)) > MAX_TRIANGLES
     {
         return Err(crate::Error::Usage(format!(
-            "--subdivide {} is over the cap ({MAX_SUBDIVIDE} levels, {MAX_SUBDIVIDED_TRIANGLES} triangles)",
+            "--subdivide {}: over the cap ({MAX_SUBDIVIDE} levels, {MAX_TRIANGLES} triangles)",
             opts.subdivide
         )));
     }
