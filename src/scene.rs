@@ -122,6 +122,12 @@ impl Scene {
             g.tri_object
                 .extend(std::iter::repeat_n(oi as u32, m.triangles.len()));
         }
+        g.face_normals = (0..g.triangles.len() as u32)
+            .map(|t| {
+                let [p0, p1, p2] = g.triangle(t);
+                (p1 - p0).cross(p2 - p0).normalize_or_zero()
+            })
+            .collect();
         g
     }
 }
@@ -136,6 +142,8 @@ pub struct Geometry {
     pub colors: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     pub tri_object: Vec<u32>,
+    /// Unit geometric normal `normalize(cross(v1 - v0, v2 - v0))` per triangle (0 if degenerate).
+    pub face_normals: Vec<Vec3>,
 }
 
 impl Geometry {

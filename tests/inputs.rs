@@ -364,6 +364,40 @@ fn regression_allocation_caps() {
     assert!(e.contains("checker") && e.contains("cap"), "{e}");
 }
 
+/// Found by the scene fuzzer (a 6 s timeout): a generated sphere subdivided 5 times is 4.7M
+/// triangles, under the old per-mesh cap of 2^24 but seconds of work from a one-line change.
+/// Subdivision now has a scene-wide budget of 2^20 triangles.
+#[test]
+fn regression_fuzz_scene_timeout_sphere_subdivide_5() {
+    let text = TOML_TEXT.replace("subdivide = 1", "subdivide = 5");
+    let e = scene_err(&text);
+    assert!(e.contains("mesh[1].subdivide") && e.contains("cap"), "{e}");
+    fuzz::scene(
+        TOML_TEXT
+            .replace("subdivide = 1", "subdivide = 2")
+            .as_bytes(),
+        &empty_dir(),
+    )
+    .unwrap();
+}
+
+/// Found by the scene fuzzer (`check_mesh` assertion): a `quad` (or `cube`) of size 0 got
+/// NaN normals from the shape generator. Generated shapes now go through `ensure_normals`.
+#[test]
+fn regression_fuzz_scene_zero_size_shape_normals() {
+    for shape in ["quad", "cube"] {
+        for size in ["[0, 1, 4]", "[4, 1, 0]", "[0, 0, 0]"] {
+            let text = TOML_TEXT.replace(
+                "shape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
+                &format!("shape = \"{shape}\"\nsize = {size}"),
+            );
+            assert!(text.contains(size), "replacement applied");
+            fuzz::scene(text.as_bytes(), &empty_dir())
+                .unwrap_or_else(|e| panic!("{shape} {size}: {e}"));
+        }
+    }
+}
+
 /// A TOML error span inside a multi-byte character must not panic the line/column count.
 #[test]
 fn regression_error_position_in_multibyte_text() {

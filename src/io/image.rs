@@ -6,8 +6,9 @@ use crate::texture::{CUBE_FACES, CubeMap, Texture};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
-/// Largest texture accepted, in pixels (checked before decoding allocates).
-pub const MAX_TEXTURE_PIXELS: u64 = 1 << 26;
+/// Largest texture accepted, in pixels (checked from the header, before decoding allocates):
+/// 2^25, e.g. 8192 x 4096; such a texture takes 400 MB as linear f32 RGB.
+pub const MAX_TEXTURE_PIXELS: u64 = 1 << 25;
 
 /// What a decoded image file was: its format, size and channel layout (for `whitted info`).
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -21,8 +21,12 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 pub const MAX_DEPTH: u32 = 64;
 /// Most subdivision levels (each multiplies triangles by 4).
 pub const MAX_SUBDIVIDE: u32 = 6;
-/// Most triangles one `[[mesh]]` may have after subdivision (checked before subdividing).
-pub const MAX_SUBDIVIDED_TRIANGLES: u64 = 1 << 24;
+/// Most triangles subdivision may make in a whole scene (checked before subdividing): a
+/// one-line `subdivide = 6` multiplies a mesh by 4096, so this budget is far below the cap on
+/// triangles read from files.
+pub const MAX_SUBDIVIDED_TRIANGLES: u64 = 1 << 20;
+/// Most triangles a whole scene may hold (after subdivision), checked mesh by mesh.
+pub const MAX_SCENE_TRIANGLES: u64 = 1 << 25;
 /// Most texels all `checker` materials of a scene may allocate together (2 of 4096 x 4096).
 pub const MAX_CHECKER_TEXELS: u64 = 1 << 25;
 
@@ -548,6 +552,10 @@ pub fn build_scene(
     }
 
     let mut objects = Vec::new();
+    let mut total_triangles = 0u64;
+    let mut subdivided_total = 0u64;
+    // Each mesh file is read once, however many `[[mesh]]` entries name it.
+    let mut loaded: Vec<(PathBuf, Mesh)> = Vec::new();
     for (i, d) in file.meshes.iter().enumerate() {
         let key = |k: &str| format!("mesh[{i}].{k}");
         let material = materials
@@ -559,7 +567,7 @@ pub fn build_scene(
                     format!("{}: no material named '{}'", key("material"), d.material),
                 )
             })?;
-        let (mesh, name) = mesh_of(d, i, path, search, &mut warnings)?;
+        let (mesh, name) = mesh_of(d, i, path, search, &mut loaded, &mut warnings)?;
         if d.subdivide > MAX_SUBDIVIDE {
             return Err(Error::scene(
                 path,
@@ -571,11 +579,14 @@ pub fn build_scene(
             ));
         }
         let subdivided = (mesh.triangles.len() as u64).saturating_mul(1 << (2 * d.subdivide));
-        if subdivided > MAX_SUBDIVIDED_TRIANGLES {
+        if d.subdivide > 0 {
+            subdivided_total += subdivided;
+        }
+        if subdivided_total > MAX_SUBDIVIDED_TRIANGLES {
             return Err(Error::scene(
                 path,
                 format!(
-                    "{}: {} levels would make {subdivided} triangles, over the cap of {MAX_SUBDIVIDED_TRIANGLES}",
+                    "{}: {} levels would make {subdivided} triangles, over the scene's cap of {MAX_SUBDIVIDED_TRIANGLES} made by subdivision",
                     key("subdivide"),
                     d.subdivide
                 ),
@@ -622,6 +633,15 @@ pub fn build_scene(
             }
             _ => {}
         }
+        total_triangles += mesh.triangles.len() as u64;
+        if total_triangles > MAX_SCENE_TRIANGLES {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "mesh[{i}]: the scene's meshes add up to over {MAX_SCENE_TRIANGLES} triangles (the cap)"
+                ),
+            ));
+        }
         objects.push(Object {
             name,
             mesh,
@@ -654,6 +674,7 @@ fn mesh_of(
     i: usize,
     path: &Path,
     search: &SearchPath,
+    loaded: &mut Vec<(PathBuf, Mesh)>,
     warnings: &mut Vec<String>,
 ) -> Result<(Mesh, String)> {
     let key = |k: &str| format!("mesh[{i}].{k}");
@@ -674,8 +695,16 @@ fn mesh_of(
         ));
     }
     if let Some(f) = &d.file {
-        let (mesh, w) = load_mesh(&search.resolve(f, path)?)?;
-        warnings.extend(w);
+        let file = search.resolve(f, path)?;
+        let mesh = match loaded.iter().find(|(p, _)| *p == file) {
+            Some((_, m)) => m.clone(),
+            None => {
+                let (mesh, w) = load_mesh(&file)?;
+                warnings.extend(w);
+                loaded.push((file, mesh.clone()));
+                mesh
+            }
+        };
         return Ok((mesh, d.name.clone().unwrap_or_else(|| f.clone())));
     }
     let name = d.name.clone().unwrap_or_else(|| format!("mesh{i}"));
@@ -718,7 +747,7 @@ fn mesh_of(
     }
     let shape = d.shape.as_deref().unwrap_or_default();
     let size = finite3(d.size.unwrap_or([1.0; 3]), &key("size"), path)?;
-    let mesh = match shape {
+    let mut mesh = match shape {
         "sphere" => {
             let radius = d.radius.unwrap_or(1.0);
             if !(radius.is_finite() && radius > 0.0) {
@@ -741,6 +770,8 @@ fn mesh_of(
             ));
         }
     };
+    // A zero size makes the shape's own normals 0/0: fall back to the geometric normals.
+    mesh.ensure_normals();
     Ok((mesh, name))
 }
 

@@ -186,31 +186,33 @@ pub fn render(
     let start = Instant::now();
     let (w, h) = (world.scene.width, world.scene.height);
     let stats = RenderStats::default();
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
-        .collect();
     let offsets = sample_offsets(settings.spp);
-    let results: Vec<((u32, u32), Vec<Vec3>)> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let pixels = match settings.engine {
-                Engine::Packet => wavefront::render_tile(world, settings, &offsets, x0, y0, &stats),
-                Engine::Scalar => {
-                    recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays)
-                }
-            };
-            progress(pixels.len() as u64);
-            ((x0, y0), pixels)
-        })
-        .collect();
     let mut image = Image::new(w as usize, h as usize);
-    for ((x0, y0), pixels) in results {
-        let tw = TILE.min(w - x0) as usize;
-        for (k, p) in pixels.into_iter().enumerate() {
-            let (x, y) = (x0 as usize + k % tw, y0 as usize + k / tw);
-            image.pixels[y * w as usize + x] = p;
-        }
-    }
+    // Bands of TILE rows in parallel, tiles written straight into the image: memory is the
+    // image plus one tile's queues per thread, whatever the resolution.
+    let band_len = TILE as usize * w as usize;
+    image
+        .pixels
+        .par_chunks_mut(band_len)
+        .enumerate()
+        .for_each(|(band, rows)| {
+            let y0 = band as u32 * TILE;
+            for x0 in (0..w).step_by(TILE as usize) {
+                let pixels = match settings.engine {
+                    Engine::Packet => {
+                        wavefront::render_tile(world, settings, &offsets, x0, y0, &stats)
+                    }
+                    Engine::Scalar => {
+                        recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays)
+                    }
+                };
+                let tw = TILE.min(w - x0) as usize;
+                for (k, p) in pixels.iter().enumerate() {
+                    rows[(k / tw) * w as usize + x0 as usize + k % tw] = *p;
+                }
+                progress(pixels.len() as u64);
+            }
+        });
     let stats = RenderStats {
         time: start.elapsed(),
         ..stats

@@ -124,6 +124,20 @@ pub struct ShadowQueue {
 }
 
 impl ShadowQueue {
+    /// Make room for `n` entries without reallocating.
+    pub fn reserve(&mut self, n: usize) {
+        for v in self
+            .o
+            .iter_mut()
+            .chain(&mut self.d)
+            .chain(&mut self.contribution)
+        {
+            v.reserve(n);
+        }
+        self.tfar.reserve(n);
+        self.pixel.reserve(n);
+    }
+
     pub fn push(
         &mut self,
         o: [f32; 3],

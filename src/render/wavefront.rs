@@ -49,6 +49,7 @@ pub fn render_tile(
     let mut hits = Vec::new();
     let mut scratch = Scratch::default();
     rays.reserve(accum.len() * offsets.len());
+    shadows.reserve(accum.len() * offsets.len() * world.scene.lights.len());
     next.reserve(accum.len() * offsets.len() * 2);
     let mut counts = [0u64; 4];
     let mut phase_ns = [0u64; 4];

@@ -5,7 +5,7 @@
 //! operation order as `direct1`. Shadow rays are not traced here: each lit lane and light
 //! becomes a shadow-queue entry carrying the contribution to add if the light is visible.
 
-use super::{Secondary, Surface, secondaries1, surface};
+use super::{Secondary, Surface, phong_pow, secondaries1, surface};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::render::{Terms, World};
 use crate::simd::{self, F32x8, LANES, M32x8, Vec3x8};
@@ -90,13 +90,13 @@ pub fn shade8(
         // diffuse: kd Od <N, l>
         let kdod = Vec3x8::new(kd * od.x, kd * od.y, kd * od.z);
         let mut c = kdod.scale(ndotl);
-        // specular: r = 2 <N, l> N - l; ks max(<v, r>, 0)^n (powf per lane, as in shade1)
+        // specular: r = 2 <N, l> N - l; ks max(<v, r>, 0)^n (phong_pow per lane, as in shade1)
         if terms.specular {
             let r = n.scale(simd::splat(2.0) * ndotl) - l;
             let base = simd::lanes(simd::max(v.dot(r), zero));
             let s = simd::from_lanes(std::array::from_fn(|i| {
                 let m = &sc.materials[surf[i].material as usize];
-                simd::lanes(ks)[i] * base[i].powf(m.n)
+                simd::lanes(ks)[i] * phong_pow(base[i], m.n)
             }));
             c = c + Vec3x8::new(s, s, s);
         }

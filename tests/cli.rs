@@ -1,0 +1,184 @@
+//! The `whitted` binary end to end: render, scene, trace-rays, and errors with exit code 2.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn whitted() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_whitted"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("whitted-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn renders_the_demo_without_any_files() {
+    let out = tmp("demo.png");
+    let r = whitted()
+        .args(["render", "--width", "64", "--height", "48", "-o"])
+        .arg(&out)
+        .env_remove("WHITTED_ASSETS")
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains("64x48") && stderr.contains("Mrays/s"),
+        "summary line: {stderr}"
+    );
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (64, 48));
+}
+
+#[test]
+fn both_engines_and_exr_output() {
+    for engine in ["packet", "scalar"] {
+        let out = tmp(&format!("demo-{engine}.exr"));
+        let r = whitted()
+            .args([
+                "render", "demo", "--width", "32", "--height", "24", "--spp", "4", "--stats",
+                "--engine", engine, "-o",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let stdout = String::from_utf8_lossy(&r.stdout);
+        assert!(
+            stdout.contains("BVH build") && stdout.contains("rays"),
+            "{stdout}"
+        );
+        assert!(std::fs::metadata(&out).unwrap().len() > 0);
+    }
+}
+
+#[test]
+fn scene_prints_editable_toml_that_renders() {
+    let r = whitted().args(["scene", "demo"]).output().unwrap();
+    assert!(r.status.success());
+    let file = tmp("demo.toml");
+    std::fs::write(&file, &r.stdout).unwrap();
+    let out = tmp("demo-from-toml.png");
+    let r = whitted()
+        .arg("render")
+        .arg(&file)
+        .args(["--width", "16", "--height", "12", "-q", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
+#[test]
+fn trace_rays_writes_one_record_per_ray_and_engines_agree() {
+    let mesh = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let rays: Vec<whitted::ray::Ray> = (0..37)
+        .map(|k| {
+            let a = k as f32 * 0.4;
+            // Odd rays look away from the cube and miss.
+            let s = if k % 2 == 0 { 1.0 } else { -1.0 };
+            whitted::ray::Ray::new(
+                glam::Vec3::new(a.sin() * 4.0, a.cos() * 4.0, 3.0),
+                glam::Vec3::new(-a.sin(), -a.cos(), -0.8) * s,
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect();
+    let input = tmp("rays.bin");
+    std::fs::write(&input, whitted::io::rays::encode_rays(&rays)).unwrap();
+    let mut outputs = Vec::new();
+    for engine in ["packet", "scalar"] {
+        let hits = tmp(&format!("hits-{engine}.bin"));
+        let r = whitted()
+            .arg("trace-rays")
+            .arg(&mesh)
+            .arg("--rays")
+            .arg(&input)
+            .arg("--hits")
+            .arg(&hits)
+            .args(["--engine", engine])
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        assert!(String::from_utf8_lossy(&r.stdout).contains("37 rays"));
+        let bytes = std::fs::read(&hits).unwrap();
+        assert_eq!(bytes.len(), 37 * 16);
+        let parsed = whitted::io::rays::parse_hits(&bytes, &hits).unwrap();
+        assert!(parsed.iter().any(|h| h.is_some()) && parsed.iter().any(|h| h.is_none()));
+        assert!(parsed.iter().flatten().all(|h| h.tri < 12));
+        outputs.push(bytes);
+    }
+    assert_eq!(
+        outputs[0], outputs[1],
+        "packet and scalar hit files are identical"
+    );
+}
+
+#[test]
+fn bad_input_is_one_line_error_with_exit_code_2() {
+    let bad = tmp("bad.toml");
+    std::fs::write(&bad, "[image]\nwidth = 4\nheight = 3\nbogus = 1\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["render".into(), bad.display().to_string(), "-q".into()],
+            "bad.toml:4",
+        ),
+        (
+            vec!["render".into(), "nosuchscene".into()],
+            "neither a built-in scene",
+        ),
+        (
+            vec![
+                "render".into(),
+                "demo".into(),
+                "--width".into(),
+                "100000".into(),
+                "--height".into(),
+                "100000".into(),
+            ],
+            "over the cap",
+        ),
+        (
+            vec![
+                "render".into(),
+                "demo".into(),
+                "--stage".into(),
+                "shiny".into(),
+            ],
+            "unknown stage",
+        ),
+        (
+            vec!["render".into(), "demo".into(), "-o".into(), "x.jpg".into()],
+            "must be .png or .exr",
+        ),
+        (
+            vec![
+                "trace-rays".into(),
+                "meshes/cube.obj".into(),
+                "--rays".into(),
+                "Cargo.toml".into(),
+                "--hits".into(),
+                tmp("h.bin").display().to_string(),
+            ],
+            "32-byte",
+        ),
+    ];
+    for (args, want) in cases {
+        let r = whitted()
+            .args(&args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(want), "{args:?}: want {want:?} in {stderr}");
+        assert_eq!(
+            stderr.trim().lines().count(),
+            1,
+            "{args:?}: one line: {stderr}"
+        );
+    }
+}
