@@ -158,17 +158,17 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
         .largest_resolution_level()
         .rgba_channels(
             |res, _| {
-                // The size was checked above for every layer; an empty one cannot get here.
-                Texture::new(
-                    res.0.max(1),
-                    res.1.max(1),
-                    vec![Vec3::ZERO; res.0.max(1) * res.1.max(1)],
-                )
+                // Zeroed f32s come from calloc: pages a truncated file never reaches are never
+                // touched, so a header claiming a big size costs little until pixels arrive.
+                // (The size was checked above for every layer.)
+                let (w, h) = (res.0.max(1), res.1.max(1));
+                (w, h, vec![0f32; 3 * w * h])
             },
-            |t: &mut Texture, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            |(w, _, t): &mut (usize, usize, Vec<f32>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
                 let clean = |c: f32| if c.is_finite() { c } else { 0.0 };
-                if let Some(px) = t.texels.get_mut(pos.1 * t.width + pos.0) {
-                    *px = Vec3::new(clean(r), clean(g), clean(b));
+                let i = 3 * (pos.1 * *w + pos.0);
+                if let Some(px) = t.get_mut(i..i + 3) {
+                    px.copy_from_slice(&[clean(r), clean(g), clean(b)]);
                 }
             },
         )
@@ -177,7 +177,12 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
         .non_parallel()
         .from_buffered(std::io::Cursor::new(bytes))
         .map_err(bad)?;
-    let tex = image.layer_data.channel_data.pixels;
+    let (w, h, samples) = image.layer_data.channel_data.pixels;
+    let tex = Texture::new(
+        w,
+        h,
+        samples.chunks_exact(3).map(Vec3::from_slice).collect(),
+    );
     let info = ImageInfo {
         width: tex.width,
         height: tex.height,
