@@ -11,12 +11,14 @@ use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8, U32x8, Vec3x8};
 
 /// The plane + barycentric test of SoA slot `i` against 8 rays. Returns the lanes that hit
-/// with `tnear < t < tfar` and their `(t, b1, b2)`. Steps as in `hit_triangle1`:
+/// with `tnear < t < tfar` and their `(t, b1, b2)`; `dlen` is `|d|` per lane (computed once
+/// per packet, as `Ray1` does per ray). Steps as in `hit_triangle1`:
 #[inline(always)]
 pub fn hit_triangle8(
     accel: &Accel,
     i: usize,
     rays: &RayPacket8,
+    dlen: F32x8,
     tfar: F32x8,
     active: M32x8,
     cull: bool,
@@ -49,7 +51,6 @@ pub fn hit_triangle8(
     let b0 = simd::splat(1.0) - b1 - b2;
     // inside when no coordinate is negative: clear lanes here, lanes within BARY_SAFE of an
     // edge by the f64 edge signs, exactly as hit_triangle1 does.
-    let dlen = simd::sqrt(rays.d.dot(rays.d));
     let s = simd::splat(BARY_SAFE) * (dlen * simd::splat(tri.n_len[i]) / dn.abs());
     let ns = -s;
     let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
@@ -118,6 +119,7 @@ fn traverse8<const ANY_HIT: bool>(
         simd::from_lanes(simd::lanes(d.z).map(safe_inv)),
     );
     let mut tfar = rays.tfar;
+    let dlen = simd::sqrt(rays.d.dot(rays.d));
     let mut stack: super::scalar::Stack<u32, 64> = super::scalar::Stack::new();
     let mut node = 0u32;
     // The root must be hit by some lane.
@@ -130,7 +132,7 @@ fn traverse8<const ANY_HIT: bool>(
         if n.count > 0 {
             for slot in n.first..n.first + n.count {
                 let slot = slot as usize;
-                let (mask, t, b1, b2) = hit_triangle8(accel, slot, rays, tfar, active, cull);
+                let (mask, t, b1, b2) = hit_triangle8(accel, slot, rays, dlen, tfar, active, cull);
                 if simd::none(mask) {
                     continue;
                 }

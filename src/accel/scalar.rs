@@ -17,18 +17,39 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// A ray as the kernel reads it: origin, direction and `|d|` (for the grazing margin),
+/// computed once per ray rather than once per triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray1 {
+    pub o: [f32; 3],
+    pub d: [f32; 3],
+    pub dlen: f32,
+}
+
+impl Ray1 {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.dir.to_array();
+        Ray1 {
+            o: ray.origin.to_array(),
+            d,
+            dlen: dot(d, d).sqrt(),
+        }
+    }
+}
+
 /// The plane + barycentric test against SoA slot `i`; `Some((t, b1, b2))` when the ray hits
 /// with `tnear < t < tfar`. Steps (identical in the 8-wide kernel):
 #[inline(always)]
 pub fn hit_triangle1(
     accel: &Accel,
     i: usize,
-    o: [f32; 3],
-    d: [f32; 3],
+    ray: &Ray1,
     tnear: f32,
     tfar: f32,
     cull: bool,
 ) -> Option<(f32, f32, f32)> {
+    let (o, d) = (ray.o, ray.d);
     let tri = &accel.tris;
     let n = tri.n(i);
     let v0 = tri.v0(i);
@@ -56,8 +77,7 @@ pub fn hit_triangle1(
     // edge signs are decided exactly-enough in f64 (the same call in the packet kernel).
     // The noise grows as the ray grazes the plane (q slides along it): the margin is
     // BARY_SAFE / |cos(d, n)|.
-    let dlen = dot(d, d).sqrt();
-    let s = BARY_SAFE * (dlen * tri.n_len[i] / dn.abs());
+    let s = BARY_SAFE * (ray.dlen * tri.n_len[i] / dn.abs());
     if b0 >= s && b1 >= s && b2 >= s {
         return Some((t, b1, b2));
     }
@@ -173,8 +193,8 @@ fn traverse1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Optio
     if accel.nodes.is_empty() {
         return None;
     }
-    let o = ray.origin.to_array();
-    let d = ray.dir.to_array();
+    let r1 = Ray1::new(ray);
+    let (o, d) = (r1.o, r1.d);
     let inv = d.map(safe_inv);
     let mut best: Option<Hit> = None;
     let mut tfar = ray.tfar;
@@ -187,7 +207,7 @@ fn traverse1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Optio
         if n.count > 0 {
             for slot in n.first..n.first + n.count {
                 let slot = slot as usize;
-                if let Some((t, b1, b2)) = hit_triangle1(accel, slot, o, d, ray.tnear, tfar, cull) {
+                if let Some((t, b1, b2)) = hit_triangle1(accel, slot, &r1, ray.tnear, tfar, cull) {
                     // record hit: once a hit exists the limit is the next float above its t,
                     // so an exact tie reaches here and keeps the lower original index; the
                     // result does not depend on the visiting order (BVH == brute force exactly).
@@ -251,12 +271,11 @@ pub fn occluded1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
 
 /// Brute force: every triangle in SoA order, same kernel and tie rule (tests and checks).
 pub fn intersect_brute1(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
-    let o = ray.origin.to_array();
-    let d = ray.dir.to_array();
+    let r1 = Ray1::new(ray);
     let mut best: Option<Hit> = None;
     let mut tfar = ray.tfar;
     for slot in 0..accel.tris.len() {
-        if let Some((t, b1, b2)) = hit_triangle1(accel, slot, o, d, ray.tnear, tfar, cull) {
+        if let Some((t, b1, b2)) = hit_triangle1(accel, slot, &r1, ray.tnear, tfar, cull) {
             let tri = accel.tris.prim[slot];
             if best.is_none_or(|b| t < b.t || tri < b.tri) {
                 best = Some(Hit { tri, t, b1, b2 });
