@@ -60,11 +60,7 @@ pub fn info(path: &Path) -> Result<Info> {
         info.fields.push(("faces", json!(cube.faces.len())));
         return Ok(info);
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let ext = crate::io::extension(path);
     match ext.as_str() {
         "m" | "obj" => {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;

@@ -32,11 +32,7 @@ pub fn load_texture(path: &Path) -> Result<Texture> {
 /// [`load_texture`] on bytes already read; `path` names the file in messages and gives the
 /// format when the bytes do not (TGA has no signature).
 pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let ext = crate::io::extension(path);
     if bytes.starts_with(&EXR_MAGIC) || (ext == "exr" && !bytes.is_empty()) {
         return decode_exr(bytes, path);
     }
@@ -268,11 +264,7 @@ fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
 
 /// Write a render: `.exr` as linear 32-bit float RGB, `.png` clamped and sRGB-encoded 8-bit.
 pub fn save_image(image: &Image, path: &Path) -> Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let ext = crate::io::extension(path);
     match ext.as_str() {
         "exr" => exr::prelude::write_rgb_file(path, image.width, image.height, |x, y| {
             let p = image.get(x, y);

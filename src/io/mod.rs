@@ -41,14 +41,9 @@ pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
 
 /// [`load_mesh`], also telling whether the file gave vertex normals (otherwise computed).
 pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
-    let parse = match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .as_deref()
-    {
-        Some("m") => mfile::parse_m_detail,
-        Some("obj") => obj::parse_obj_detail,
+    let parse = match extension(path).as_str() {
+        "m" => mfile::parse_m_detail,
+        "obj" => obj::parse_obj_detail,
         _ => {
             return Err(Error::parse(
                 path,
@@ -58,4 +53,12 @@ pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
         }
     };
     parse(&read_regular(path)?, path)
+}
+
+/// A file's extension in lower case (`""` when it has none): how every loader picks a format.
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
 }

@@ -172,6 +172,14 @@ impl RenderStats {
     pub const PHASES: [&'static str; 4] = ["primary", "shade", "shadow", "secondary"];
 }
 
+/// Exclusive end `(x1, y1)` of the tile starting at `(x0, y0)`, clipped to the image.
+pub fn tile_end(camera: &crate::camera::Camera, x0: u32, y0: u32) -> (u32, u32) {
+    (
+        (x0 + TILE).min(camera.width),
+        (y0 + TILE).min(camera.height),
+    )
+}
+
 /// Tile edge in pixels: small enough to balance threads, big enough for coherent packets.
 pub const TILE: u32 = 16;
 

@@ -1,6 +1,6 @@
 //! The scalar reference renderer: `trace1(ray, depth)` recursion over `intersect1` / `occluded1`.
 
-use super::{RayCounts, Settings, TILE, Terms, World};
+use super::{RayCounts, Settings, Terms, World, tile_end};
 use crate::accel::intersect1;
 use crate::ray::Ray;
 use crate::shade::{SecondaryKind, shade1};
@@ -35,10 +35,7 @@ pub fn render_tile(
     let camera = world.scene.camera();
     let terms = Terms::of(settings.stage);
     let depth = settings.depth(&world.scene);
-    let (x1, y1) = (
-        (x0 + TILE).min(camera.width),
-        (y0 + TILE).min(camera.height),
-    );
+    let (x1, y1) = tile_end(&camera, x0, y0);
     let mut counts = [0u64; 4];
     let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
     let scale = 1.0 / offsets.len() as f32;

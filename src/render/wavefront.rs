@@ -7,7 +7,7 @@
 //! Queues are SoA and tile-local, so memory does not grow with the image size.
 
 use super::queues::{RayQueue, ShadowQueue};
-use super::{RenderStats, Settings, TILE, Terms, World};
+use super::{RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{intersect8, occluded8};
 use crate::camera::Camera;
 use crate::packet::{HitPacket8, PacketShape};
@@ -35,10 +35,7 @@ pub fn render_tile(
     let camera = world.scene.camera();
     let terms = Terms::of(settings.stage);
     let depth = settings.depth(&world.scene);
-    let (x1, y1) = (
-        (x0 + TILE).min(camera.width),
-        (y0 + TILE).min(camera.height),
-    );
+    let (x1, y1) = tile_end(&camera, x0, y0);
     let mut accum = vec![Vec3::ZERO; ((x1 - x0) * (y1 - y0)) as usize];
     let (mut rays, mut next, mut shadows) = (
         RayQueue::default(),
