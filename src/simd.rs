@@ -148,6 +148,11 @@ impl Vec3x8 {
     pub fn scale(self, s: F32x8) -> Self {
         Vec3x8::new(self.x * s, self.y * s, self.z * s)
     }
+    /// Component-wise product (glam's `Vec3 * Vec3`).
+    #[inline(always)]
+    pub fn mul_elem(self, o: Self) -> Self {
+        Vec3x8::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
     #[inline(always)]
     pub fn select(m: M32x8, a: Self, b: Self) -> Self {
         Vec3x8::new(

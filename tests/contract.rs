@@ -231,9 +231,9 @@ fn depth_zero_means_no_secondary_rays() {
 }
 
 /// The wavefront packet engine and the scalar reference agree on every scene and stage. Both
-/// trace identical rays (intersect8 lanes equal intersect1 bit for bit, secondary rays come
-/// from the same function), so pixels differ only by the order in which contributions are
-/// summed: at most 1e-5 per channel.
+/// trace identical rays (intersect8 lanes equal intersect1 bit for bit, shade8 lanes equal the
+/// scalar shading bit for bit, see below), so pixels differ only by the order in which
+/// contributions are summed: at most 1e-5 per channel.
 #[test]
 fn packet_and_scalar_engines_agree_on_every_scene_and_stage() {
     use whitted::render::Engine;
@@ -274,4 +274,87 @@ fn packet_and_scalar_engines_agree_on_every_scene_and_stage() {
             }
         }
     }
+}
+
+/// `shade8` is the lane twin of the scalar shading: for every lane of camera packets and of
+/// the reflection / refraction packets they spawn, on every scene (with a non-integer Phong
+/// exponent on one material, so both exponent paths run), it computes bit for bit what
+/// `surface`, `direct1`, `shadow_ray` and `secondaries1` compute.
+#[test]
+fn shade8_lanes_equal_the_scalar_shading_bit_for_bit() {
+    use whitted::accel::intersect8;
+    use whitted::packet::{PacketShape, RayPacket8, camera_packet};
+    use whitted::render::Terms;
+    use whitted::shade::{Shade8, direct1, secondaries1, shade8, shadow_ray, surface};
+    use whitted::simd;
+    let bits3 = |v: Vec3| v.to_array().map(f32::to_bits);
+    let mut lanes_checked = 0;
+    for (name, odd_exponent) in [
+        ("phong", false),
+        ("phong", true),
+        ("vertex_color", false),
+        ("texture", false),
+        ("cubemap", false),
+        ("refraction", true),
+        ("demo", false),
+    ] {
+        let mut w = world(name, 64, 48);
+        if odd_exponent {
+            w.scene.materials[0].n = 33.3;
+        }
+        let cam = w.scene.camera();
+        let terms = Terms::of(None);
+        let cull = w.scene.cull_backfaces;
+        let mut out = Shade8::default();
+        let mut queue: Vec<(RayPacket8, simd::M32x8)> = Vec::new();
+        for y in (0..cam.height).step_by(2) {
+            for x in (0..cam.width).step_by(4) {
+                queue.push(camera_packet(&cam, PacketShape::Block4x2, x, y, 0.5, 0.5));
+            }
+        }
+        for generation in 0..3 {
+            let mut next = Vec::new();
+            for (packet, active) in &queue {
+                let hits = intersect8(&w.accel, packet, *active, cull);
+                let mask = hits.hit_mask() & *active;
+                let depth = [2 - generation; 8];
+                shade8(&w, terms, packet, &hits, mask, depth, &mut out);
+                let mut spawned = [None; 2].map(|_: Option<()>| [None; 8]);
+                for i in (0..8).filter(|&i| simd::lane_set(mask, i)) {
+                    let (ray, hit) = (packet.lane(i), hits.lane(i).unwrap());
+                    let s = surface(&w, &ray, &hit);
+                    let direct = direct1(&w, terms, &s, ray.dir, |_| true);
+                    let mut sum = Vec3::from(out.ambient.lane(i));
+                    for (l, light) in out.lights.iter().zip(&w.scene.lights) {
+                        if simd::lane_set(l.lit, i) {
+                            sum += Vec3::from(l.contribution.lane(i));
+                            let r = shadow_ray(&s, light.position, w.eps);
+                            assert_eq!(bits3(Vec3::from(l.origin.lane(i))), bits3(r.origin));
+                            assert_eq!(bits3(Vec3::from(l.dir.lane(i))), bits3(r.dir));
+                            assert_eq!(simd::lanes(l.tfar)[i].to_bits(), r.tfar.to_bits());
+                        }
+                    }
+                    assert_eq!(bits3(sum), bits3(direct), "{name} lane {i}");
+                    let scalar = secondaries1(&w, &s, ray.dir, depth[i]);
+                    for (k, sec) in [&out.reflection, &out.refraction].into_iter().enumerate() {
+                        assert_eq!(simd::lane_set(sec.mask, i), scalar[k].is_some());
+                        if let Some(r) = scalar[k] {
+                            assert_eq!(bits3(Vec3::from(sec.origin.lane(i))), bits3(r.ray.origin));
+                            assert_eq!(bits3(Vec3::from(sec.dir.lane(i))), bits3(r.ray.dir));
+                            assert_eq!(Vec3::splat(simd::lanes(sec.weight)[i]), r.weight);
+                            spawned[k][i] = Some(r.ray);
+                        }
+                    }
+                    lanes_checked += 1;
+                }
+                for rays in spawned {
+                    if rays.iter().any(Option::is_some) {
+                        next.push(RayPacket8::from_fn(|i| rays[i]));
+                    }
+                }
+            }
+            queue = next;
+        }
+    }
+    assert!(lanes_checked > 10_000, "{lanes_checked} lanes checked");
 }

@@ -2,8 +2,69 @@
 
 use crate::packet::RayPacket8;
 use crate::ray::Ray;
-use crate::simd::{self, LANES, M32x8, Vec3x8};
+use crate::simd::{self, F32x8, LANES, M32x8, Vec3x8};
 use glam::Vec3;
+
+/// The set lanes of an 8-bit lane mask, in order: the compaction that repacks a packet's
+/// surviving lanes densely onto the end of a queue.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneList {
+    idx: [u8; LANES],
+    len: usize,
+}
+
+impl LaneList {
+    #[inline(always)]
+    pub fn new(bits: u32) -> Self {
+        let mut idx = [0u8; LANES];
+        let mut len = 0;
+        let mut b = bits & 0xff;
+        while b != 0 {
+            idx[len] = b.trailing_zeros() as u8;
+            len += 1;
+            b &= b - 1;
+        }
+        LaneList { idx, len }
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Append the listed lanes of `v` to `out`.
+    #[inline(always)]
+    pub fn extend<T: Copy + Default>(&self, out: &mut Vec<T>, v: [T; LANES]) {
+        if self.len == LANES {
+            out.extend_from_slice(&v);
+        } else {
+            let mut tmp = [T::default(); LANES];
+            for (k, &i) in self.idx[..self.len].iter().enumerate() {
+                tmp[k] = v[i as usize];
+            }
+            out.extend_from_slice(&tmp[..self.len]);
+        }
+    }
+
+    #[inline(always)]
+    fn extend3(&self, out: &mut [Vec<f32>; 3], v: &Vec3x8) {
+        for (o, l) in out.iter_mut().zip(v.to_lanes()) {
+            self.extend(o, l);
+        }
+    }
+}
+
+/// `len` entries of `v` from `start` as lanes, padded with `pad`.
+#[inline(always)]
+fn lanes_of<T: Copy>(v: &[T], start: usize, pad: T) -> [T; LANES] {
+    let mut out = [pad; LANES];
+    let end = (start + LANES).min(v.len());
+    out[..end - start].copy_from_slice(&v[start..end]);
+    out
+}
 
 /// Rays waiting for a closest-hit query (camera, reflection or refraction rays), each with
 /// the pixel it contributes to, the RGB weight of that contribution and its remaining depth.
@@ -25,6 +86,46 @@ impl RayQueue {
         }
         self.pixel.push(pixel);
         self.depth.push(depth);
+    }
+
+    /// Append the lanes of `bits`, densely (the repacking step).
+    #[inline]
+    pub fn push_lanes(
+        &mut self,
+        bits: u32,
+        o: &Vec3x8,
+        d: &Vec3x8,
+        pixel: [u32; LANES],
+        weight: &Vec3x8,
+        depth: [u32; LANES],
+    ) {
+        let lanes = LaneList::new(bits);
+        if lanes.is_empty() {
+            return;
+        }
+        lanes.extend3(&mut self.o, o);
+        lanes.extend3(&mut self.d, d);
+        lanes.extend3(&mut self.weight, weight);
+        lanes.extend(&mut self.pixel, pixel);
+        lanes.extend(&mut self.depth, depth);
+    }
+
+    /// Pixels of entries `start .. start + 8` (0 past the end).
+    #[inline]
+    pub fn pixel_lanes(&self, start: usize) -> [u32; LANES] {
+        lanes_of(&self.pixel, start, 0)
+    }
+
+    /// Remaining depths of entries `start .. start + 8` (0 past the end).
+    #[inline]
+    pub fn depth_lanes(&self, start: usize) -> [u32; LANES] {
+        lanes_of(&self.depth, start, 0)
+    }
+
+    /// Weights of entries `start .. start + 8` (0 past the end).
+    #[inline]
+    pub fn weight_lanes(&self, start: usize) -> Vec3x8 {
+        Vec3x8::load(&self.weight, start, 0.0)
     }
 
     pub fn len(&self) -> usize {
@@ -138,21 +239,26 @@ impl ShadowQueue {
         self.pixel.reserve(n);
     }
 
-    pub fn push(
+    /// Append the lanes of `bits`, densely.
+    #[inline]
+    pub fn push_lanes(
         &mut self,
-        o: [f32; 3],
-        d: [f32; 3],
-        tfar: f32,
-        pixel: u32,
-        contribution: [f32; 3],
+        bits: u32,
+        o: &Vec3x8,
+        d: &Vec3x8,
+        tfar: F32x8,
+        pixel: [u32; LANES],
+        contribution: &Vec3x8,
     ) {
-        for k in 0..3 {
-            self.o[k].push(o[k]);
-            self.d[k].push(d[k]);
-            self.contribution[k].push(contribution[k]);
+        let lanes = LaneList::new(bits);
+        if lanes.is_empty() {
+            return;
         }
-        self.tfar.push(tfar);
-        self.pixel.push(pixel);
+        lanes.extend3(&mut self.o, o);
+        lanes.extend3(&mut self.d, d);
+        lanes.extend3(&mut self.contribution, contribution);
+        lanes.extend(&mut self.tfar, simd::lanes(tfar));
+        lanes.extend(&mut self.pixel, pixel);
     }
 
     pub fn len(&self) -> usize {

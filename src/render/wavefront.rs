@@ -11,8 +11,8 @@ use super::{RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{intersect8, occluded8};
 use crate::camera::Camera;
 use crate::packet::{HitPacket8, PacketShape};
-use crate::shade::{SecondaryKind, Shade8, shade8};
-use crate::simd::{self, LANES};
+use crate::shade::{Shade8, shade8};
+use crate::simd::{self, LANES, Vec3x8};
 use glam::Vec3;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -144,16 +144,10 @@ fn intersect_closest(world: &World, rays: &RayQueue, out: &mut Vec<HitPacket8>) 
     }));
 }
 
-/// One light's lanes of a shaded packet as plain arrays: lit bits, shadow-ray origin,
-/// direction, tfar, and the contribution.
-type LightArrays = (u32, [[f32; 8]; 3], [[f32; 8]; 3], [f32; 8], [[f32; 8]; 3]);
-
 /// Buffers reused by `shade_hits` from packet to packet.
 #[derive(Default)]
 struct Scratch {
     shade: Shade8,
-    /// Per light: lit lanes, origin, direction, tfar, contribution, as lane arrays.
-    lights: Vec<LightArrays>,
 }
 
 /// Rays that hit nothing take the background, times their weight.
@@ -170,7 +164,8 @@ fn handle_escaped_rays(world: &World, rays: &RayQueue, hits: &[HitPacket8], accu
 }
 
 /// Whitted's equation at every hit (`shade8`): ambient straight into the pixel, one shadow
-/// ray per lit hit and light into the shadow queue, reflection and refraction rays into `next`.
+/// ray per lit hit and light into the shadow queue, reflection and refraction rays into `next`
+/// (each packet's surviving lanes appended densely: the repacking).
 #[allow(clippy::too_many_arguments)]
 fn shade_hits(
     world: &World,
@@ -190,57 +185,41 @@ fn shade_hits(
         if bits == 0 {
             continue;
         }
-        let lanes = (0..LANES).filter(move |&i| bits >> i & 1 == 1);
+        let pixel = rays.pixel_lanes(start);
+        let w = rays.weight_lanes(start);
         if terms.white {
-            for i in lanes {
-                accum[rays.pixel[start + i] as usize] += rays.weight(start + i);
-            }
+            add_lanes(accum, bits, pixel, &w);
             continue;
         }
         let (packet, _) = rays.packet(start);
-        let depth = std::array::from_fn(|i| rays.depth.get(start + i).copied().unwrap_or(0));
+        let depth = rays.depth_lanes(start);
         shade8(world, terms, &packet, h, mask, depth, &mut scratch.shade);
         let s = &scratch.shade;
-        // Lane values out of the SIMD registers once per packet.
-        let ambient = s.ambient.to_lanes();
-        scratch.lights.clear();
-        scratch.lights.extend(s.lights.iter().map(|l| {
-            (
-                simd::bitmask(l.lit),
-                l.origin.to_lanes(),
-                l.dir.to_lanes(),
-                simd::lanes(l.tfar),
-                l.contribution.to_lanes(),
-            )
-        }));
-        let lights = &scratch.lights;
-        for i in lanes {
-            let j = start + i;
-            let (pixel, w) = (rays.pixel[j], rays.weight(j));
-            let at = |a: &[[f32; 8]; 3]| Vec3::new(a[0][i], a[1][i], a[2][i]);
-            accum[pixel as usize] += w * at(&ambient);
-            for (lit, origin, dir, tfar, contribution) in lights {
-                if lit >> i & 1 == 0 {
-                    continue;
-                }
-                let c = w * at(contribution);
-                if terms.shadows {
-                    shadows.push(
-                        at(origin).to_array(),
-                        at(dir).to_array(),
-                        tfar[i],
-                        pixel,
-                        c.to_array(),
-                    );
-                } else {
-                    accum[pixel as usize] += c;
-                }
-            }
-            for sec in s.secondaries[i].iter().flatten() {
-                counts[2 + (sec.kind == SecondaryKind::Refraction) as usize] += 1;
-                next.push(&sec.ray, pixel, w * sec.weight, depth[i] - 1);
+        add_lanes(accum, bits, pixel, &w.mul_elem(s.ambient));
+        for l in &s.lights {
+            let lit = simd::bitmask(l.lit);
+            let c = w.mul_elem(l.contribution);
+            if terms.shadows {
+                shadows.push_lanes(lit, &l.origin, &l.dir, l.tfar, pixel, &c);
+            } else {
+                add_lanes(accum, lit, pixel, &c);
             }
         }
+        let depth = depth.map(|d| d.saturating_sub(1));
+        for (sec, kind) in [(&s.reflection, 2), (&s.refraction, 3)] {
+            let b = simd::bitmask(sec.mask);
+            counts[kind] += b.count_ones() as u64;
+            next.push_lanes(b, &sec.origin, &sec.dir, pixel, &w.scale(sec.weight), depth);
+        }
+    }
+}
+
+/// `accum[pixel[i]] += v[i]` for the lanes of `bits`.
+#[inline]
+fn add_lanes(accum: &mut [Vec3], bits: u32, pixel: [u32; LANES], v: &Vec3x8) {
+    let v = v.to_lanes();
+    for i in (0..LANES).filter(|&i| bits >> i & 1 == 1) {
+        accum[pixel[i] as usize] += Vec3::new(v[0][i], v[1][i], v[2][i]);
     }
 }
 

@@ -9,7 +9,7 @@ pub use packet::{Shade8, shade8};
 use crate::accel::occluded1;
 use crate::ray::{Hit, Ray, offset_origin, reflect, refract};
 use crate::render::{Terms, World};
-use crate::scene::{Albedo, Material};
+use crate::scene::{Albedo, Geometry, Material};
 use glam::Vec3;
 
 /// Everything shading needs at a hit point.
@@ -58,20 +58,35 @@ pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
         ng = -ng;
         n = -n;
     }
-    let material = g.tri_object[hit.tri as usize];
-    let m = &world.scene.materials[world.scene.objects[material as usize].material];
-    let od = match &m.albedo {
-        Albedo::Color(c) => *c,
-        Albedo::VertexColor => b0 * g.colors[i0] + b1 * g.colors[i1] + b2 * g.colors[i2],
-        Albedo::Texture(t) => t.sample_uv(b0 * g.uvs[i0] + b1 * g.uvs[i1] + b2 * g.uvs[i2]),
-    };
+    let material = triangle_material(world, hit.tri);
+    let m = &world.scene.materials[material as usize];
     Surface {
         q,
         ng,
         n,
         back,
-        od,
-        material: world.scene.objects[material as usize].material as u32,
+        od: albedo(g, m, [i0, i1, i2], b0, b1, b2),
+        material,
+    }
+}
+
+/// Index of the material of triangle `tri` (scene order).
+#[inline]
+pub fn triangle_material(world: &World, tri: u32) -> u32 {
+    let object = world.geometry.tri_object[tri as usize];
+    world.scene.objects[object as usize].material as u32
+}
+
+/// `Od` at barycentric weights `b0 b1 b2` of the triangle with vertices `v`: the material's
+/// colour, the interpolated vertex colour or the texture at the interpolated `uv`.
+/// Shared by `surface` and `shade8`.
+#[inline]
+pub fn albedo(g: &Geometry, m: &Material, v: [usize; 3], b0: f32, b1: f32, b2: f32) -> Vec3 {
+    let [i0, i1, i2] = v;
+    match &m.albedo {
+        Albedo::Color(c) => *c,
+        Albedo::VertexColor => b0 * g.colors[i0] + b1 * g.colors[i1] + b2 * g.colors[i2],
+        Albedo::Texture(t) => t.sample_uv(b0 * g.uvs[i0] + b1 * g.uvs[i1] + b2 * g.uvs[i2]),
     }
 }
 
@@ -80,10 +95,33 @@ pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
 /// ulps of it; other exponents by `powf`. Shared by `shade1` and `shade8`.
 #[inline]
 pub fn phong_pow(x: f32, n: f32) -> f32 {
-    if n.fract() == 0.0 && (0.0..=4096.0).contains(&n) {
-        x.powi(n as i32)
+    if whole_exponent(n) {
+        powi_by_squaring(x, n as u32)
     } else {
         x.powf(n)
+    }
+}
+
+/// Exponents `phong_pow` takes by repeated squaring.
+#[inline]
+pub fn whole_exponent(n: f32) -> bool {
+    n.fract() == 0.0 && (0.0..=4096.0).contains(&n)
+}
+
+/// `x^e` by binary exponentiation (compiler-rt's `__powisf2` loop, written out so that
+/// `shade8`'s lane version `powi8` performs exactly the same multiplications).
+#[inline]
+pub fn powi_by_squaring(mut x: f32, mut e: u32) -> f32 {
+    let mut r = 1.0f32;
+    loop {
+        if e & 1 == 1 {
+            r *= x;
+        }
+        e >>= 1;
+        if e == 0 {
+            return r;
+        }
+        x *= x;
     }
 }
 

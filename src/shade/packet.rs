@@ -1,17 +1,21 @@
 //! `shade8`: Whitted's equation across the 8 lanes of a hit packet; twin of `shade1`.
 //!
-//! Interpolating the hit (normal, colour, uv, material) is a per-lane gather done with the
-//! scalar `surface`; the lighting that follows runs across lanes with the same steps and
-//! operation order as `direct1`. Shadow rays are not traced here: each lit lane and light
-//! becomes a shadow-queue entry carrying the contribution to add if the light is visible.
+//! Per lane there are only loads: the triangle's vertex and face normals, its material's
+//! constants and `Od` (the material colour, interpolated vertex colours or the texture, through
+//! `albedo`, shared with `surface`). Everything after that runs across lanes with the same
+//! operations in the same order as `surface`, `direct1` and `secondaries1`: interpolation and
+//! normalisation of N, the back-face flip, ambient, diffuse, the Phong lobe, shadow-ray
+//! origins, reflection and refraction directions (with total internal reflection) and their
+//! offset origins. Shadow rays are not traced here: each lit lane and light becomes a
+//! shadow-queue entry carrying the contribution to add if the light is visible.
 
-use super::{Secondary, Surface, phong_pow, secondaries1, surface};
+use super::{albedo, phong_pow, triangle_material, whole_exponent};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::render::{Terms, World};
 use crate::simd::{self, F32x8, LANES, M32x8, Vec3x8};
-use glam::Vec3;
 
 /// One light's share of a hit packet: the shadow rays and what they carry.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct LightLanes {
     /// Lanes where `<N, l> > 0` (the light can contribute).
     pub lit: M32x8,
@@ -22,14 +26,25 @@ pub struct LightLanes {
     pub contribution: Vec3x8,
 }
 
+/// The reflection or the refraction rays of a hit packet.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SecondaryLanes {
+    /// Lanes that spawn this ray (a hit with depth left and `ks > 0`, resp. `kt > 0`).
+    pub mask: M32x8,
+    pub origin: Vec3x8,
+    pub dir: Vec3x8,
+    /// `ks` or `kt`: the weight the ray's colour is added with.
+    pub weight: F32x8,
+}
+
 /// What shading a hit packet produces (reused across packets to avoid allocating).
-#[derive(Default)]
+#[derive(Clone, Debug, Default)]
 pub struct Shade8 {
     /// `Ia ka Od` per lane.
     pub ambient: Vec3x8,
     pub lights: Vec<LightLanes>,
-    /// Reflection and refraction rays per lane (scalar `secondaries1`, shared with `shade1`).
-    pub secondaries: [[Option<Secondary>; 2]; LANES],
+    pub reflection: SecondaryLanes,
+    pub refraction: SecondaryLanes,
 }
 
 #[inline(always)]
@@ -37,6 +52,71 @@ fn normalize8(v: Vec3x8) -> Vec3x8 {
     // As glam's `normalize`: v * (1 / sqrt(<v, v>)).
     let r = simd::splat(1.0) / simd::sqrt(v.dot(v));
     v.scale(r)
+}
+
+/// `x^e` in every lane by the multiplications of `powi_by_squaring`.
+#[inline(always)]
+fn powi8(mut x: F32x8, mut e: u32) -> F32x8 {
+    let mut r = simd::splat(1.0);
+    loop {
+        if e & 1 == 1 {
+            r *= x;
+        }
+        e >>= 1;
+        if e == 0 {
+            return r;
+        }
+        x = x * x;
+    }
+}
+
+/// Per-lane loads of a hit packet, as lane arrays (inactive lanes zero).
+#[derive(Default)]
+struct Gathered {
+    /// Vertex normals of the hit triangle: `vn[vertex][axis][lane]`.
+    vn: [[[f32; LANES]; 3]; 3],
+    ng: [[f32; LANES]; 3],
+    od: [[f32; LANES]; 3],
+    /// `ka kd ks n kt ior` per lane.
+    k: [[f32; LANES]; 6],
+    material: [u32; LANES],
+}
+
+fn gather(world: &World, hits: &HitPacket8, bits: u32, b: [[f32; LANES]; 3]) -> Gathered {
+    let g = &world.geometry;
+    let tri = simd::u32_lanes(hits.tri);
+    let mut out = Gathered::default();
+    for i in (0..LANES).filter(|&i| bits >> i & 1 == 1) {
+        let t = tri[i];
+        let v = g.triangles[t as usize].map(|x| x as usize);
+        for (vk, &vi) in v.iter().enumerate() {
+            let n = g.normals[vi];
+            out.vn[vk][0][i] = n.x;
+            out.vn[vk][1][i] = n.y;
+            out.vn[vk][2][i] = n.z;
+        }
+        let ng = g.face_normals[t as usize];
+        let material = triangle_material(world, t);
+        let m = &world.scene.materials[material as usize];
+        let od = albedo(g, m, v, b[0][i], b[1][i], b[2][i]);
+        for a in 0..3 {
+            out.ng[a][i] = ng[a];
+            out.od[a][i] = od[a];
+        }
+        for (k, value) in [m.ka, m.kd, m.ks, m.n, m.kt, m.ior].into_iter().enumerate() {
+            out.k[k][i] = value;
+        }
+        out.material[i] = material;
+    }
+    out
+}
+
+fn vec3x8(a: &[[f32; LANES]; 3]) -> Vec3x8 {
+    Vec3x8::new(
+        simd::from_lanes(a[0]),
+        simd::from_lanes(a[1]),
+        simd::from_lanes(a[2]),
+    )
 }
 
 /// Shade the lanes of `mask` (rays that hit); `depth[i]` is lane `i`'s remaining depth.
@@ -50,35 +130,40 @@ pub fn shade8(
     out: &mut Shade8,
 ) {
     let sc = &world.scene;
-    // surface: per-lane gather (flat default for inactive lanes).
-    let flat = Surface {
-        q: Vec3::ZERO,
-        ng: Vec3::Y,
-        n: Vec3::Y,
-        back: false,
-        od: Vec3::ZERO,
-        material: 0,
-    };
-    let surf: [Surface; LANES] =
-        std::array::from_fn(|i| match (simd::lane_set(mask, i), hits.lane(i)) {
-            (true, Some(h)) => surface(world, &rays.lane(i), &h),
-            _ => flat,
-        });
-    let mat = |f: &dyn Fn(&crate::scene::Material) -> f32| {
-        simd::from_lanes(std::array::from_fn(|i| {
-            f(&sc.materials[surf[i].material as usize])
-        }))
-    };
-    let (ka, kd, ks) = (mat(&|m| m.ka), mat(&|m| m.kd), mat(&|m| m.ks));
-    let q = Vec3x8::from_fn(|i| surf[i].q.to_array());
-    let n = Vec3x8::from_fn(|i| surf[i].n.to_array());
-    let ng = Vec3x8::from_fn(|i| surf[i].ng.to_array());
-    let od = Vec3x8::from_fn(|i| surf[i].od.to_array());
+    let bits = simd::bitmask(mask);
+    let (zero, one) = (simd::splat(0.0), simd::splat(1.0));
+
+    // surface: q, interpolated N (Ng where it vanishes), back-face flip, Od, material.
+    let (b1, b2) = (hits.b1, hits.b2);
+    let b0 = one - b1 - b2;
+    let gl = gather(world, hits, bits, [b0, b1, b2].map(simd::lanes));
+    let q = rays.o + rays.d.scale(hits.t);
+    let mut ng = vec3x8(&gl.ng);
+    let ni =
+        vec3x8(&gl.vn[0]).scale(b0) + vec3x8(&gl.vn[1]).scale(b1) + vec3x8(&gl.vn[2]).scale(b2);
+    // glam's try_normalize: 1 / |n| must be finite and positive.
+    let rcp = one / simd::sqrt(ni.dot(ni));
+    let ok = simd::gt(rcp, zero) & simd::lt(rcp, simd::splat(f32::INFINITY));
+    let mut n = Vec3x8::select(ok, ni.scale(rcp), ng);
+    let back = simd::gt(rays.d.dot(ng), zero);
+    ng = Vec3x8::select(back, -ng, ng);
+    n = Vec3x8::select(back, -n, n);
+    let od = vec3x8(&gl.od);
+    let [ka, kd, ks, n_exp, kt, ior] = gl.k.map(simd::from_lanes);
+
     // ambient: Ia ka Od
     let ia = Vec3x8::splat(sc.ambient.to_array());
-    let ambient = Vec3x8::new(ia.x * ka * od.x, ia.y * ka * od.y, ia.z * ka * od.z);
+    out.ambient = Vec3x8::new(ia.x * ka * od.x, ia.y * ka * od.y, ia.z * ka * od.z);
+
+    // One Phong exponent for the whole packet (the usual case) is raised across lanes.
+    let first = gl.material[bits.trailing_zeros() as usize % LANES];
+    let uniform_n = (0..LANES)
+        .filter(|&i| bits >> i & 1 == 1)
+        .all(|i| gl.material[i] == first)
+        .then(|| sc.materials[first as usize].n)
+        .filter(|&e| whole_exponent(e));
+
     let v = -normalize8(rays.d);
-    let zero = simd::splat(0.0);
     let eps = simd::splat(world.eps);
     out.lights.clear();
     for light in &sc.lights {
@@ -90,43 +175,66 @@ pub fn shade8(
         // diffuse: kd Od <N, l>
         let kdod = Vec3x8::new(kd * od.x, kd * od.y, kd * od.z);
         let mut c = kdod.scale(ndotl);
-        // specular: r = 2 <N, l> N - l; ks max(<v, r>, 0)^n (phong_pow per lane, as in shade1)
+        // specular: r = 2 <N, l> N - l; ks max(<v, r>, 0)^n
         if terms.specular {
             let r = n.scale(simd::splat(2.0) * ndotl) - l;
-            let base = simd::lanes(simd::max(v.dot(r), zero));
-            let s = simd::from_lanes(std::array::from_fn(|i| {
-                let m = &sc.materials[surf[i].material as usize];
-                simd::lanes(ks)[i] * phong_pow(base[i], m.n)
-            }));
+            let base = simd::max(v.dot(r), zero);
+            let pow = match uniform_n {
+                Some(e) => powi8(base, e as u32),
+                None => {
+                    let (b, e) = (simd::lanes(base), simd::lanes(n_exp));
+                    simd::from_lanes(std::array::from_fn(|i| phong_pow(b[i], e[i])))
+                }
+            };
+            let s = ks * pow;
             c = c + Vec3x8::new(s, s, s);
         }
         let ip = Vec3x8::splat(light.intensity.to_array());
-        let contribution = Vec3x8::new(ip.x * c.x, ip.y * c.y, ip.z * c.z);
         // shadow ray: origin offset along +-Ng to the light's side, tfar to the light.
         let side = simd::gt(l.dot(ng), zero);
         let origin = Vec3x8::select(side, q + ng.scale(eps), q - ng.scale(eps));
         let to_light = lp - origin;
-        let tfar = simd::sqrt(to_light.dot(to_light));
         out.lights.push(LightLanes {
             lit,
             origin,
             dir: l,
-            tfar,
-            contribution,
+            tfar: simd::sqrt(to_light.dot(to_light)),
+            contribution: ip.mul_elem(c),
         });
     }
-    let dirs = rays.d.to_lanes();
-    out.ambient = ambient;
-    out.secondaries = std::array::from_fn(|i| {
-        if simd::lane_set(mask, i) {
-            secondaries1(
-                world,
-                &surf[i],
-                Vec3::new(dirs[0][i], dirs[1][i], dirs[2][i]),
-                depth[i],
-            )
-        } else {
-            [None, None]
+
+    // secondaries (lanes with depth left): d_r = d - 2 <d, N> N, offset origins.
+    let alive =
+        mask & simd::mask_from_bits((0..LANES).fold(0, |b, i| b | ((depth[i] > 0) as u32) << i));
+    let d = normalize8(rays.d);
+    let dr = normalize8(d - n.scale(simd::splat(2.0) * d.dot(n)));
+    let offset = |dir: Vec3x8| {
+        let side = simd::gt(dir.dot(ng), zero);
+        Vec3x8::select(side, q + ng.scale(eps), q - ng.scale(eps))
+    };
+    out.reflection = SecondaryLanes {
+        mask: alive & simd::gt(ks, zero),
+        origin: offset(dr),
+        dir: dr,
+        weight: ks,
+    };
+    // refraction: eta = 1/ior entering through a front face, ior leaving through a back
+    // face; N turned against d; total internal reflection (k < 0) takes d_r.
+    let refr = alive & simd::gt(kt, zero);
+    out.refraction = if simd::any(refr) {
+        let eta = simd::select(back, ior, one / ior);
+        let nt = Vec3x8::select(simd::gt(d.dot(n), zero), -n, n);
+        let cosi = -d.dot(nt);
+        let k = one - eta * eta * (one - cosi * cosi);
+        let t = normalize8(d.scale(eta) + nt.scale(eta * cosi - simd::sqrt(k)));
+        let dt = Vec3x8::select(simd::lt(k, zero), dr, t);
+        SecondaryLanes {
+            mask: refr,
+            origin: offset(dt),
+            dir: dt,
+            weight: kt,
         }
-    });
+    } else {
+        SecondaryLanes::default()
+    };
 }
