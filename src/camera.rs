@@ -1,6 +1,7 @@
 //! The pinhole camera of SCENES.md §1: basis, pixel-centre rays, stratified sub-samples.
 
 use crate::ray::Ray;
+use crate::simd::{self, F32x8, Vec3x8};
 use glam::Vec3;
 
 /// A camera ready to generate rays for a `width x height` image.
@@ -42,6 +43,17 @@ impl Camera {
         let y = (1.0 - 2.0 * py / h) * self.tan_half;
         let dir = (self.f + x * self.r + y * self.u).normalize();
         Ray::new(self.eye, dir, 0.0, f32::INFINITY)
+    }
+
+    /// The directions of `ray_at` at eight image positions, computed across lanes with
+    /// exactly `ray_at`'s operations (so each lane equals the scalar ray bit for bit).
+    pub fn dirs8(&self, px: F32x8, py: F32x8) -> Vec3x8 {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let (one, two) = (simd::splat(1.0), simd::splat(2.0));
+        let x = (two * px / simd::splat(w) - one) * simd::splat(self.tan_half) * simd::splat(w / h);
+        let y = (one - two * py / simd::splat(h)) * simd::splat(self.tan_half);
+        let [f, r, u] = [self.f, self.r, self.u].map(|v| Vec3x8::splat(v.to_array()));
+        (f + r.scale(x) + u.scale(y)).normalize()
     }
 
     /// The primary ray through the centre of pixel `(i, j)` (column `i`, row `j` from the top).

@@ -84,11 +84,24 @@ pub fn camera_packet(
     sx: f32,
     sy: f32,
 ) -> (RayPacket8, M32x8) {
-    RayPacket8::from_fn(|i| {
+    let mut bits = 0;
+    let (mut px, mut py) = ([0.0f32; LANES], [0.0f32; LANES]);
+    for i in 0..LANES {
         let (dx, dy) = shape.offset(i);
         let (x, y) = (x0 + dx, y0 + dy);
-        (x < camera.width && y < camera.height).then(|| camera.ray_at(x as f32 + sx, y as f32 + sy))
-    })
+        if x < camera.width && y < camera.height {
+            bits |= 1 << i;
+        }
+        px[i] = x as f32 + sx;
+        py[i] = y as f32 + sy;
+    }
+    let packet = RayPacket8 {
+        o: Vec3x8::splat(camera.eye.to_array()),
+        d: camera.dirs8(simd::from_lanes(px), simd::from_lanes(py)),
+        tnear: simd::splat(0.0),
+        tfar: simd::splat(f32::INFINITY),
+    };
+    (packet, simd::mask_from_bits(bits))
 }
 
 /// Closest hits of a packet; lanes without a hit have `tri == Hit::NONE_ID`.

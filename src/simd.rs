@@ -148,6 +148,11 @@ impl Vec3x8 {
     pub fn scale(self, s: F32x8) -> Self {
         Vec3x8::new(self.x * s, self.y * s, self.z * s)
     }
+    /// As glam's `normalize`: `v * (1 / sqrt(<v, v>))`.
+    #[inline(always)]
+    pub fn normalize(self) -> Self {
+        self.scale(splat(1.0) / sqrt(self.dot(self)))
+    }
     /// Component-wise product (glam's `Vec3 * Vec3`).
     #[inline(always)]
     pub fn mul_elem(self, o: Self) -> Self {

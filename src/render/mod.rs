@@ -203,15 +203,19 @@ pub fn render(
         .pixels
         .par_chunks_mut(band_len)
         .enumerate()
-        .for_each(|(band, rows)| {
+        .for_each_init(wavefront::Workspace::default, |ws, (band, rows)| {
             let y0 = band as u32 * TILE;
             for x0 in (0..w).step_by(TILE as usize) {
-                let pixels = match settings.engine {
+                let scalar;
+                let pixels: &[Vec3] = match settings.engine {
                     Engine::Packet => {
-                        wavefront::render_tile(world, settings, &offsets, x0, y0, &stats)
+                        wavefront::render_tile(world, settings, &offsets, x0, y0, &stats, ws);
+                        &ws.accum
                     }
                     Engine::Scalar => {
-                        recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays)
+                        scalar =
+                            recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays);
+                        &scalar
                     }
                 };
                 let tw = TILE.min(w - x0) as usize;

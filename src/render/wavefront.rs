@@ -10,7 +10,7 @@ use super::queues::{RayQueue, ShadowQueue};
 use super::{RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{intersect8, occluded8};
 use crate::camera::Camera;
-use crate::packet::{HitPacket8, PacketShape};
+use crate::packet::{HitPacket8, PacketShape, camera_packet};
 use crate::shade::{Shade8, shade8};
 use crate::simd::{self, LANES, Vec3x8};
 use glam::Vec3;
@@ -23,7 +23,21 @@ use std::time::Instant;
 /// as they are queued (pixel order). Off; `RayQueue::bin_by_octant` stays for other scenes.
 pub const BIN_SECONDARY: bool = false;
 
-/// Render the tile with corner `(x0, y0)`; pixels row-major within the tile.
+/// Queues and buffers of one worker, reused from tile to tile (so a tile allocates nothing
+/// once the first few tiles have grown them).
+#[derive(Default)]
+pub struct Workspace {
+    rays: RayQueue,
+    next: RayQueue,
+    shadows: ShadowQueue,
+    spare: RayQueue,
+    hits: Vec<HitPacket8>,
+    scratch: Scratch,
+    /// The tile's pixels, row-major.
+    pub accum: Vec<Vec3>,
+}
+
+/// Render the tile with corner `(x0, y0)` into `ws.accum` (pixels row-major within the tile).
 pub fn render_tile(
     world: &World,
     settings: &Settings,
@@ -31,59 +45,62 @@ pub fn render_tile(
     x0: u32,
     y0: u32,
     stats: &RenderStats,
-) -> Vec<Vec3> {
+    ws: &mut Workspace,
+) {
     let camera = world.scene.camera();
     let terms = Terms::of(settings.stage);
     let depth = settings.depth(&world.scene);
     let (x1, y1) = tile_end(&camera, x0, y0);
-    let mut accum = vec![Vec3::ZERO; ((x1 - x0) * (y1 - y0)) as usize];
-    let (mut rays, mut next, mut shadows) = (
-        RayQueue::default(),
-        RayQueue::default(),
-        ShadowQueue::default(),
-    );
-    let mut spare = RayQueue::default();
-    let mut hits = Vec::new();
-    let mut scratch = Scratch::default();
-    rays.reserve(accum.len() * offsets.len());
-    shadows.reserve(accum.len() * offsets.len() * world.scene.lights.len());
-    next.reserve(accum.len() * offsets.len() * 2);
+    let Workspace {
+        rays,
+        next,
+        shadows,
+        spare,
+        hits,
+        scratch,
+        accum,
+    } = ws;
+    accum.clear();
+    accum.resize(((x1 - x0) * (y1 - y0)) as usize, Vec3::ZERO);
+    rays.clear();
+    next.clear();
+    shadows.clear();
     let mut counts = [0u64; 4];
     let mut phase_ns = [0u64; 4];
 
-    generate_camera_rays(&camera, offsets, (x0, y0, x1, y1), depth, &mut rays);
+    generate_camera_rays(&camera, offsets, (x0, y0, x1, y1), depth, rays);
     counts[0] += rays.len() as u64;
     let mut generation = 0;
     while !rays.is_empty() {
         let start = Instant::now();
-        intersect_closest(world, &rays, &mut hits);
+        intersect_closest(world, rays, hits);
         phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
 
         let start = Instant::now();
-        handle_escaped_rays(world, &rays, &hits, &mut accum);
+        handle_escaped_rays(world, rays, hits, accum);
         shade_hits(
             world,
             terms,
-            &rays,
-            &hits,
-            &mut accum,
-            &mut shadows,
-            &mut next,
+            rays,
+            hits,
+            accum,
+            shadows,
+            next,
             &mut counts,
-            &mut scratch,
+            scratch,
         );
         phase_ns[1] += start.elapsed().as_nanos() as u64;
 
         let start = Instant::now();
         counts[1] += shadows.len() as u64;
-        trace_shadow_rays(world, &shadows, &mut accum);
+        trace_shadow_rays(world, shadows, accum);
         shadows.clear();
         phase_ns[2] += start.elapsed().as_nanos() as u64;
 
-        std::mem::swap(&mut rays, &mut next);
+        std::mem::swap(rays, next);
         next.clear();
         if BIN_SECONDARY {
-            rays.bin_by_octant(&mut spare);
+            rays.bin_by_octant(spare);
         }
         generation += 1;
     }
@@ -98,7 +115,6 @@ pub fn render_tile(
     for (a, ns) in stats.phase_ns.iter().zip(phase_ns) {
         a.fetch_add(ns, Ordering::Relaxed);
     }
-    accum
 }
 
 /// Camera rays of the tile `(x0, y0, x1, y1)` for every sample offset, in 4x2 pixel blocks so
@@ -112,24 +128,32 @@ fn generate_camera_rays(
 ) {
     let shape = PacketShape::Block4x2;
     let (pw, ph) = shape.size();
-    let weight = Vec3::splat(1.0 / offsets.len() as f32);
+    let weight = Vec3x8::splat([1.0 / offsets.len() as f32; 3]);
     let tw = x1 - x0;
+    let pixel_of = |bx: u32, by: u32| -> [u32; LANES] {
+        std::array::from_fn(|i| {
+            let (dx, dy) = shape.offset(i);
+            let (x, y) = ((bx + dx).min(x1 - 1), (by + dy).min(y1 - 1));
+            (y - y0) * tw + (x - x0)
+        })
+    };
     for &(sx, sy) in offsets {
         for by in (y0..y1).step_by(ph as usize) {
             for bx in (x0..x1).step_by(pw as usize) {
-                for i in 0..LANES {
+                let (packet, active) = camera_packet(camera, shape, bx, by, sx, sy);
+                // Lanes past the tile's edge (not only the image's) are left out.
+                let inside = (0..LANES).fold(0, |b, i| {
                     let (dx, dy) = shape.offset(i);
-                    let (x, y) = (bx + dx, by + dy);
-                    if x < x1 && y < y1 {
-                        let pixel = (y - y0) * tw + (x - x0);
-                        out.push(
-                            &camera.ray_at(x as f32 + sx, y as f32 + sy),
-                            pixel,
-                            weight,
-                            depth,
-                        );
-                    }
-                }
+                    b | ((bx + dx < x1 && by + dy < y1) as u32) << i
+                });
+                out.push_lanes(
+                    simd::bitmask(active) & inside,
+                    &packet.o,
+                    &packet.d,
+                    pixel_of(bx, by),
+                    &weight,
+                    [depth; LANES],
+                );
             }
         }
     }

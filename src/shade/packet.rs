@@ -47,13 +47,6 @@ pub struct Shade8 {
     pub refraction: SecondaryLanes,
 }
 
-#[inline(always)]
-fn normalize8(v: Vec3x8) -> Vec3x8 {
-    // As glam's `normalize`: v * (1 / sqrt(<v, v>)).
-    let r = simd::splat(1.0) / simd::sqrt(v.dot(v));
-    v.scale(r)
-}
-
 /// `x^e` in every lane by the multiplications of `powi_by_squaring`.
 #[inline(always)]
 fn powi8(mut x: F32x8, mut e: u32) -> F32x8 {
@@ -163,12 +156,12 @@ pub fn shade8(
         .then(|| sc.materials[first as usize].n)
         .filter(|&e| whole_exponent(e));
 
-    let v = -normalize8(rays.d);
+    let v = -rays.d.normalize();
     let eps = simd::splat(world.eps);
     out.lights.clear();
     for light in &sc.lights {
         let lp = Vec3x8::splat(light.position.to_array());
-        let l = normalize8(lp - q);
+        let l = (lp - q).normalize();
         let ndotl = n.dot(l);
         // Both terms vanish where <N, l> <= 0, so no shadow ray is needed there.
         let lit = mask & simd::gt(ndotl, zero);
@@ -206,8 +199,8 @@ pub fn shade8(
     // secondaries (lanes with depth left): d_r = d - 2 <d, N> N, offset origins.
     let alive =
         mask & simd::mask_from_bits((0..LANES).fold(0, |b, i| b | ((depth[i] > 0) as u32) << i));
-    let d = normalize8(rays.d);
-    let dr = normalize8(d - n.scale(simd::splat(2.0) * d.dot(n)));
+    let d = rays.d.normalize();
+    let dr = (d - n.scale(simd::splat(2.0) * d.dot(n))).normalize();
     let offset = |dir: Vec3x8| {
         let side = simd::gt(dir.dot(ng), zero);
         Vec3x8::select(side, q + ng.scale(eps), q - ng.scale(eps))
@@ -226,7 +219,7 @@ pub fn shade8(
         let nt = Vec3x8::select(simd::gt(d.dot(n), zero), -n, n);
         let cosi = -d.dot(nt);
         let k = one - eta * eta * (one - cosi * cosi);
-        let t = normalize8(d.scale(eta) + nt.scale(eta * cosi - simd::sqrt(k)));
+        let t = (d.scale(eta) + nt.scale(eta * cosi - simd::sqrt(k))).normalize();
         let dt = Vec3x8::select(simd::lt(k, zero), dr, t);
         SecondaryLanes {
             mask: refr,
