@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
-use whitted::render::{Settings, Stage, World, render};
+use whitted::render::{Settings, Stage, World, check_work, render};
 use whitted::{Error, Result, scenes};
 
 #[derive(Parser)]
@@ -273,13 +273,14 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     for w in warnings {
         eprintln!("warning: {w}");
     }
-    let world = World::new(scene);
     let settings = Settings {
         stage,
         depth: args.depth,
         spp: args.spp,
         engine,
     };
+    check_work(&scene, &settings).map_err(|e| Error::scene(&path, e))?;
+    let world = World::new(scene);
     let (w, h) = (world.scene.width, world.scene.height);
     let bar = if args.quiet {
         ProgressBar::hidden()

@@ -142,6 +142,16 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
             "over the cap",
         ),
         (
+            // glass that also mirrors, 64 bounces: 2^65 rays per sample in the worst case
+            vec![
+                "render".into(),
+                "demo".into(),
+                "--depth".into(),
+                "64".into(),
+            ],
+            "over the cap of 2^38",
+        ),
+        (
             vec![
                 "render".into(),
                 "demo".into(),

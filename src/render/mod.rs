@@ -109,6 +109,54 @@ impl Settings {
     }
 }
 
+/// The most rays a render may trace in the worst case ([`worst_case_rays`]): 2^38, a few
+/// hours on two cores. Over it, `whitted render` refuses to start rather than run for days.
+pub const MAX_WORST_CASE_RAYS: f64 = (1u64 << 38) as f64;
+
+/// An upper bound on the rays a render traces: every camera sample's ray tree full to the
+/// depth (two children per hit when some material both reflects and refracts, one when
+/// materials only reflect or only refract), and one shadow ray per light at every hit.
+/// Real renders trace far fewer (rays escape); the bound is what makes `depth = 64` with
+/// glass that also mirrors (2^65 rays per sample) an error instead of a hang.
+pub fn worst_case_rays(scene: &Scene, settings: &Settings) -> f64 {
+    let depth = settings.depth(scene);
+    let m = &scene.materials;
+    let branching = if m.iter().any(|m| m.ks > 0.0 && m.kt > 0.0) {
+        2.0
+    } else if m.iter().any(|m| m.ks > 0.0 || m.kt > 0.0) {
+        1.0
+    } else {
+        0.0
+    };
+    let tree: f64 = (0..=depth).map(|g| f64::powi(branching, g as i32)).sum();
+    let samples = scene.width as f64 * scene.height as f64 * settings.spp.max(1) as f64;
+    samples * tree * (1 + scene.lights.len()) as f64
+}
+
+/// `Err` with a sentence naming the size, samples and depth when [`worst_case_rays`] is over
+/// [`MAX_WORST_CASE_RAYS`].
+pub fn check_work(scene: &Scene, settings: &Settings) -> Result<(), String> {
+    let rays = worst_case_rays(scene, settings);
+    if rays <= MAX_WORST_CASE_RAYS {
+        return Ok(());
+    }
+    let both = scene
+        .materials
+        .iter()
+        .find(|m| m.ks > 0.0 && m.kt > 0.0)
+        .map_or(String::new(), |m| {
+            format!(", material '{}' both reflects and refracts", m.name)
+        });
+    Err(format!(
+        "up to {rays:.3e} rays ({}x{}, {} spp, depth {}{both}) is over the cap of 2^38; \
+         lower render.depth (--depth), the size or --spp",
+        scene.width,
+        scene.height,
+        settings.spp.max(1),
+        settings.depth(scene),
+    ))
+}
+
 /// A scene ready to render: flattened geometry, its BVH, the offset `eps`.
 pub struct World {
     pub scene: Scene,
