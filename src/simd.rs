@@ -114,6 +114,16 @@ pub fn u32_from_lanes(a: [u32; 8]) -> U32x8 {
     U32x8::from(a)
 }
 
+/// Entries `start .. start + 8` of `v` as lanes; lanes past the end are `pad`. The full case
+/// is a fixed 32-byte copy (a variable-length `copy_from_slice` would call `memmove`).
+#[inline(always)]
+pub fn lanes_from<T: Copy>(v: &[T], start: usize, pad: T) -> [T; LANES] {
+    match v.get(start..start + LANES) {
+        Some(s) => std::array::from_fn(|i| s[i]),
+        None => std::array::from_fn(|i| v.get(start + i).copied().unwrap_or(pad)),
+    }
+}
+
 /// Eight 3-vectors in SoA form.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Vec3x8 {
@@ -178,12 +188,7 @@ impl Vec3x8 {
     /// Lanes `start .. start + 8` of three SoA arrays; lanes past the end are `pad`.
     #[inline(always)]
     pub fn load(a: &[Vec<f32>; 3], start: usize, pad: f32) -> Self {
-        let get = |v: &Vec<f32>| {
-            let mut out = [pad; 8];
-            let end = (start + 8).min(v.len());
-            out[..end - start].copy_from_slice(&v[start..end]);
-            from_lanes(out)
-        };
+        let get = |v: &Vec<f32>| from_lanes(lanes_from(v, start, pad));
         Vec3x8::new(get(&a[0]), get(&a[1]), get(&a[2]))
     }
     pub fn from_fn(f: impl Fn(usize) -> [f32; 3]) -> Self {

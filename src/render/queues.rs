@@ -37,15 +37,11 @@ impl LaneList {
 
     /// Append the listed lanes of `v` to `out`.
     #[inline(always)]
-    pub fn extend<T: Copy + Default>(&self, out: &mut Vec<T>, v: [T; LANES]) {
+    pub fn extend<T: Copy>(&self, out: &mut Vec<T>, v: [T; LANES]) {
         if self.len == LANES {
             out.extend_from_slice(&v);
         } else {
-            let mut tmp = [T::default(); LANES];
-            for (k, &i) in self.idx[..self.len].iter().enumerate() {
-                tmp[k] = v[i as usize];
-            }
-            out.extend_from_slice(&tmp[..self.len]);
+            out.extend(self.idx[..self.len].iter().map(|&i| v[i as usize]));
         }
     }
 
@@ -55,15 +51,6 @@ impl LaneList {
             self.extend(o, l);
         }
     }
-}
-
-/// `len` entries of `v` from `start` as lanes, padded with `pad`.
-#[inline(always)]
-fn lanes_of<T: Copy>(v: &[T], start: usize, pad: T) -> [T; LANES] {
-    let mut out = [pad; LANES];
-    let end = (start + LANES).min(v.len());
-    out[..end - start].copy_from_slice(&v[start..end]);
-    out
 }
 
 /// Rays waiting for a closest-hit query (camera, reflection or refraction rays), each with
@@ -113,13 +100,13 @@ impl RayQueue {
     /// Pixels of entries `start .. start + 8` (0 past the end).
     #[inline]
     pub fn pixel_lanes(&self, start: usize) -> [u32; LANES] {
-        lanes_of(&self.pixel, start, 0)
+        simd::lanes_from(&self.pixel, start, 0)
     }
 
     /// Remaining depths of entries `start .. start + 8` (0 past the end).
     #[inline]
     pub fn depth_lanes(&self, start: usize) -> [u32; LANES] {
-        lanes_of(&self.depth, start, 0)
+        simd::lanes_from(&self.depth, start, 0)
     }
 
     /// Weights of entries `start .. start + 8` (0 past the end).
@@ -284,13 +271,11 @@ impl ShadowQueue {
 
     pub fn packet(&self, start: usize) -> (RayPacket8, M32x8) {
         let n = (self.len() - start).min(LANES);
-        let mut tfar = [0.0f32; LANES];
-        tfar[..n].copy_from_slice(&self.tfar[start..start + n]);
         let packet = RayPacket8 {
             o: Vec3x8::load(&self.o, start, 0.0),
             d: Vec3x8::load(&self.d, start, 1.0),
             tnear: simd::splat(0.0),
-            tfar: simd::from_lanes(tfar),
+            tfar: simd::from_lanes(simd::lanes_from(&self.tfar, start, 0.0)),
         };
         (packet, simd::mask_from_bits((1u32 << n) - 1))
     }
