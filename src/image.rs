@@ -23,16 +23,68 @@ impl Image {
         self.pixels[y * self.width + x]
     }
 
-    /// 8-bit sRGB bytes of `clamp(I, 0, 1)` (NaN becomes 0).
+    /// 8-bit sRGB bytes of `clamp(I, 0, 1)` (NaN becomes 0): [`srgb8`] per channel.
     pub fn to_srgb8(&self) -> Vec<u8> {
-        self.pixels
-            .iter()
-            .flat_map(|p| p.to_array())
-            .map(|c| {
-                (srgb_encode(if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) }) * 255.0 + 0.5) as u8
-            })
-            .collect()
+        let mut out = Vec::with_capacity(self.pixels.len() * 3);
+        for p in &self.pixels {
+            out.extend(p.to_array().map(srgb8));
+        }
+        out
     }
+}
+
+/// The 8-bit sRGB code of a linear value: `round(255 srgb_encode(clamp(c, 0, 1)))`, NaN -> 0.
+pub fn srgb8_formula(c: f32) -> u8 {
+    (srgb_encode(if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) }) * 255.0 + 0.5) as u8
+}
+
+/// Buckets of [`srgb8`]'s table over [0, 1].
+const SRGB8_BUCKETS: usize = 4096;
+
+struct Srgb8Table {
+    /// `thresholds[k]`: the smallest f32 whose code is `k + 1`.
+    thresholds: [f32; 255],
+    /// The code of `i / SRGB8_BUCKETS`.
+    start: [u8; SRGB8_BUCKETS],
+}
+
+/// [`srgb8_formula`] without a `powf` per channel (a 4K PNG has 25M channels). The code is
+/// monotonic in `c`: the table holds the 255 values where it steps up, found once by
+/// bisection over the f32 bit patterns with the formula itself, and the code at the start
+/// of each of 4096 buckets; a value takes its bucket's code and steps past the (at most
+/// two) thresholds inside the bucket. Equal to the formula for every f32 (exhaustive test).
+pub fn srgb8(c: f32) -> u8 {
+    static TABLE: std::sync::OnceLock<Box<Srgb8Table>> = std::sync::OnceLock::new();
+    let t = TABLE.get_or_init(|| {
+        let thresholds: [f32; 255] = std::array::from_fn(|k| {
+            let (mut lo, mut hi) = (0u32, 1f32.to_bits());
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if srgb8_formula(f32::from_bits(mid)) as usize > k {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            f32::from_bits(lo)
+        });
+        let start = std::array::from_fn(|i| {
+            let c = i as f32 / SRGB8_BUCKETS as f32;
+            thresholds.partition_point(|&x| x <= c) as u8
+        });
+        Box::new(Srgb8Table { thresholds, start })
+    });
+    if !(c > 0.0) {
+        return 0; // zero, negative, NaN
+    }
+    if c >= 1.0 {
+        return srgb8_formula(1.0);
+    }
+    let mut code = t.start[(c * SRGB8_BUCKETS as f32) as usize];
+    while code < 255 && t.thresholds[code as usize] <= c {
+        code += 1;
+    }
+    code
 }
 
 /// The sRGB transfer function (linear -> encoded), for values in [0, 1].
@@ -64,6 +116,57 @@ mod tests {
         assert!((srgb_decode(srgb_encode(0.2) as f64) - 0.2).abs() < 1e-6);
         // Middle grey 0.5 encoded is 188/255 (0.7354).
         assert!((srgb_encode(0.5) - 0.735_356_7).abs() < 1e-5);
+    }
+
+    #[test]
+    fn srgb8_equals_the_formula_around_every_threshold_and_across_the_range() {
+        let mut checked = 0;
+        for k in 1..=255u8 {
+            // the first value with code k, found by scanning the formula from below
+            let first = (0..=1f32.to_bits())
+                .rev()
+                .step_by(1 << 12)
+                .map(f32::from_bits)
+                .find(|&c| srgb8_formula(c) < k)
+                .unwrap();
+            let mut b = first.to_bits();
+            while srgb8_formula(f32::from_bits(b)) < k {
+                b += 1;
+            }
+            for bits in b.saturating_sub(64)..b + 64 {
+                let c = f32::from_bits(bits);
+                assert_eq!(srgb8(c), srgb8_formula(c), "{c:e}");
+                checked += 1;
+            }
+        }
+        for bits in (0..=1f32.to_bits()).step_by(4099) {
+            let c = f32::from_bits(bits);
+            assert_eq!(srgb8(c), srgb8_formula(c), "{c:e}");
+            checked += 1;
+        }
+        for c in [
+            -1.0,
+            -0.0,
+            1.0,
+            1.5,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ] {
+            assert_eq!(srgb8(c), srgb8_formula(c), "{c:e}");
+        }
+        assert!(checked > 250_000);
+    }
+
+    /// Every f32 in [0, 1] (about 10^9 values; tens of seconds):
+    /// `cargo test --release --lib srgb8_exhaustive -- --ignored`.
+    #[test]
+    #[ignore]
+    fn srgb8_exhaustive() {
+        for bits in 0..=1f32.to_bits() {
+            let c = f32::from_bits(bits);
+            assert_eq!(srgb8(c), srgb8_formula(c), "{c:e}");
+        }
     }
 
     #[test]
