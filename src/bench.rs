@@ -850,9 +850,12 @@ pub fn run_peer(
     threads: usize,
     subdivide: u32,
     reps: usize,
+    (width, height): (u32, u32),
 ) -> Result<(PeerReport, String), String> {
     let out = std::process::Command::new(peer)
         .arg(mesh)
+        .args(["--width", &width.to_string()])
+        .args(["--height", &height.to_string()])
         .args(["--threads", &threads.to_string()])
         .args(["--subdivide", &subdivide.to_string()])
         .args(["--reps", &reps.to_string()])
@@ -885,6 +888,12 @@ pub struct Options {
     /// Midpoint subdivision levels (x4 triangles each, the peer's vertex and child order).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 0))]
     pub subdivide: u32,
+    /// Image width of the camera workloads (also the peer's `--width`).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = WIDTH))]
+    pub width: u32,
+    /// Image height of the camera workloads (also the peer's `--height`).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = HEIGHT))]
+    pub height: u32,
     /// Timed passes per workload after one warm-up (best and median are reported).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 5))]
     pub reps: usize,
@@ -946,6 +955,8 @@ impl Report {
 /// Caps of `whitted bench --subdivide` (the peer's kitten level 3 is 1.3M triangles).
 pub const MAX_SUBDIVIDE: u32 = 6;
 pub const MAX_TRIANGLES: u64 = 1 << 25;
+/// Cap of `whitted bench --width x --height` (8K is 2^25).
+pub const MAX_PIXELS: u64 = 1 << 26;
 
 /// Load, subdivide, build, generate and time one mesh (and run the peer on it).
 pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
@@ -958,19 +969,33 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
             opts.subdivide
         )));
     }
+    // 0 (the `Default` of `Options`) means the peer's default size.
+    let width = if opts.width == 0 { WIDTH } else { opts.width };
+    let height = if opts.height == 0 {
+        HEIGHT
+    } else {
+        opts.height
+    };
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(crate::Error::Usage(format!(
+            "--width {width} --height {height}: over the cap of {MAX_PIXELS} pixels"
+        )));
+    }
     let mesh = subdivide_like_peer(&mesh, opts.subdivide);
     let tris = triangles(&mesh);
     let threads = opts.threads.max(1);
     let reps = opts.reps.clamp(1, 64);
     let (accel, build) = time_build(&tris, reps);
-    let work = Workloads::generate(&mesh, &accel, WIDTH, HEIGHT);
+    let work = Workloads::generate(&mesh, &accel, width, height);
     let measured = measure(&accel, &work, threads, reps);
     let peer = if opts.no_peer {
         Err("not run (--no-peer)".to_string())
     } else {
         match find_peer(opts.peer.as_deref()) {
             None => Err("rt-bench not found (PATH, --peer or WHITTED_PEER)".to_string()),
-            Some(p) => run_peer(&p, path, threads, opts.subdivide, reps).map(|r| r.0),
+            Some(p) => {
+                run_peer(&p, path, threads, opts.subdivide, reps, (width, height)).map(|r| r.0)
+            }
         }
     };
     Ok(Report {

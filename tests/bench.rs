@@ -288,3 +288,34 @@ fn peer_lookup_prefers_the_explicit_path() {
     let p = std::path::Path::new("/nonexistent/rt-bench");
     assert_eq!(bench::find_peer(Some(p)).as_deref(), Some(p));
 }
+
+/// `--width/--height` size the camera workloads (the peer gets the same flags); absurd sizes
+/// are refused before anything is allocated.
+#[test]
+fn bench_size_options() {
+    use whitted::bench::{Options, Workload, bench_mesh};
+    let opts = Options {
+        meshes: vec![],
+        width: 64,
+        height: 36,
+        reps: 1,
+        no_peer: true,
+        ..Options::default()
+    };
+    let cube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let r = bench_mesh(&cube, &opts).unwrap();
+    assert_eq!((r.width, r.height), (64, 36));
+    let m = r
+        .measured
+        .iter()
+        .find(|m| m.workload == Workload::Primary)
+        .unwrap();
+    assert_eq!(m.results.tri.len(), 64 * 36);
+    let huge = Options {
+        width: 1 << 20,
+        height: 1 << 20,
+        ..opts
+    };
+    let e = bench_mesh(&cube, &huge).unwrap_err().to_string();
+    assert!(e.contains("over the cap"), "{e}");
+}
