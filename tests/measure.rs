@@ -7,6 +7,8 @@
 //! 1. obvhs build preset: build time (kitten, bunny, subdivided kittens) and the packet
 //!    engine's primary-ray throughput on the resulting tree.
 //! 2. camera packet shape: 4x2 pixel blocks against 8x1 rows.
+//! 3. the wavefront issue's speed criterion: `phong` at 3840x2160 on one thread, scalar
+//!    and packet engines alternately in the same run, best of 3 each, and their ratio.
 
 mod common;
 
@@ -92,4 +94,43 @@ fn packet_shapes() {
         let (mrays, hits) = primary_mrays(&a, shape);
         println!("{shape:?}: {mrays:.1} Mrays/s ({hits} hits)");
     }
+}
+
+#[test]
+#[ignore]
+fn engine_speed_4k_phong() {
+    use whitted::render::{Engine, Settings, render};
+    let w = common::world("phong", 3840, 2160);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut best = [f64::INFINITY; 2];
+    let mut images = Vec::new();
+    for _ in 0..3 {
+        for (k, engine) in [Engine::Scalar, Engine::Packet].into_iter().enumerate() {
+            let s = Settings {
+                engine,
+                ..Settings::default()
+            };
+            let (image, stats) = pool.install(|| render(&w, &s, &|_| {}));
+            let t = stats.time.as_secs_f64();
+            println!("{engine:?}: {t:.3} s, {} rays", stats.rays.total());
+            best[k] = best[k].min(t);
+            images.push(image);
+        }
+    }
+    let max = images[0]
+        .pixels
+        .iter()
+        .zip(&images[1].pixels)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0f32, f32::max);
+    println!(
+        "phong 3840x2160, 1 thread, best of 3: scalar {:.3} s, packet {:.3} s, {:.2}x \
+         (max pixel difference {max:e})",
+        best[0],
+        best[1],
+        best[0] / best[1]
+    );
 }
