@@ -96,7 +96,7 @@ pub fn albedo(g: &Geometry, m: &Material, v: [usize; 3], b0: f32, b1: f32, b2: f
 #[inline]
 pub fn phong_pow(x: f32, n: f32) -> f32 {
     if whole_exponent(n) {
-        powi_by_squaring(x, n as u32)
+        powi_by_squaring(x, n as u32, 1.0)
     } else {
         x.powf(n)
     }
@@ -108,20 +108,21 @@ pub fn whole_exponent(n: f32) -> bool {
     n.fract() == 0.0 && (0.0..=4096.0).contains(&n)
 }
 
-/// `x^e` by binary exponentiation (compiler-rt's `__powisf2` loop, written out so that
-/// `shade8`'s lane version `powi8` performs exactly the same multiplications).
-#[inline]
-pub fn powi_by_squaring(mut x: f32, mut e: u32) -> f32 {
-    let mut r = 1.0f32;
+/// `x^e` by binary exponentiation (compiler-rt's `__powisf2` loop, written out), for `f32`
+/// and for `F32x8` lanes alike, so that `shade1` and `shade8` perform the same
+/// multiplications.
+#[inline(always)]
+pub fn powi_by_squaring<T: Copy + std::ops::Mul<Output = T>>(mut x: T, mut e: u32, one: T) -> T {
+    let mut r = one;
     loop {
         if e & 1 == 1 {
-            r *= x;
+            r = r * x;
         }
         e >>= 1;
         if e == 0 {
             return r;
         }
-        x *= x;
+        x = x * x;
     }
 }
 

@@ -9,7 +9,7 @@
 //! offset origins. Shadow rays are not traced here: each lit lane and light becomes a
 //! shadow-queue entry carrying the contribution to add if the light is visible.
 
-use super::{albedo, phong_pow, triangle_material, whole_exponent};
+use super::{albedo, phong_pow, powi_by_squaring, triangle_material, whole_exponent};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::render::{Terms, World};
 use crate::simd::{self, F32x8, LANES, M32x8, Vec3x8};
@@ -45,22 +45,6 @@ pub struct Shade8 {
     pub lights: Vec<LightLanes>,
     pub reflection: SecondaryLanes,
     pub refraction: SecondaryLanes,
-}
-
-/// `x^e` in every lane by the multiplications of `powi_by_squaring`.
-#[inline(always)]
-fn powi8(mut x: F32x8, mut e: u32) -> F32x8 {
-    let mut r = simd::splat(1.0);
-    loop {
-        if e & 1 == 1 {
-            r *= x;
-        }
-        e >>= 1;
-        if e == 0 {
-            return r;
-        }
-        x = x * x;
-    }
 }
 
 /// Per-lane loads of a hit packet, as lane arrays (inactive lanes zero).
@@ -173,7 +157,7 @@ pub fn shade8(
             let r = n.scale(simd::splat(2.0) * ndotl) - l;
             let base = simd::max(v.dot(r), zero);
             let pow = match uniform_n {
-                Some(e) => powi8(base, e as u32),
+                Some(e) => powi_by_squaring(base, e as u32, one),
                 None => {
                     let (b, e) = (simd::lanes(base), simd::lanes(n_exp));
                     simd::from_lanes(std::array::from_fn(|i| phong_pow(b[i], e[i])))
