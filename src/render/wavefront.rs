@@ -4,7 +4,8 @@
 //! generate_camera_rays -> intersect_closest -> handle_escaped_rays -> shade_hits
 //!   -> trace_shadow_rays -> (reflection + refraction queue, repacked) -> intersect_closest ...
 //!
-//! Queues are SoA and tile-local, so memory does not grow with the image size.
+//! Queues are SoA and tile-local (kept in one `Workspace` per worker thread and reused from
+//! tile to tile), so memory does not grow with the image size.
 
 use super::queues::{RayQueue, ShadowQueue};
 use super::{RenderStats, Settings, Terms, World, tile_end};
@@ -34,7 +35,7 @@ pub struct Workspace {
     shadows: ShadowQueue,
     spare: RayQueue,
     hits: Vec<HitPacket8>,
-    scratch: Scratch,
+    shade: Shade8,
     /// The tile's pixels, row-major.
     pub accum: Vec<Vec3>,
 }
@@ -59,7 +60,7 @@ pub fn render_tile(
         shadows,
         spare,
         hits,
-        scratch,
+        shade,
         accum,
     } = ws;
     accum.clear();
@@ -89,7 +90,7 @@ pub fn render_tile(
             shadows,
             next,
             &mut counts,
-            scratch,
+            shade,
         );
         phase_ns[1] += start.elapsed().as_nanos() as u64;
 
@@ -99,11 +100,14 @@ pub fn render_tile(
         shadows.clear();
         phase_ns[2] += start.elapsed().as_nanos() as u64;
 
+        // the repacking of the next generation counts as secondary-ray time
+        let start = Instant::now();
         std::mem::swap(rays, next);
         next.clear();
         if BIN_SECONDARY {
             rays.bin_by_octant(spare);
         }
+        phase_ns[3] += start.elapsed().as_nanos() as u64;
         generation += 1;
     }
 
@@ -170,12 +174,6 @@ fn intersect_closest(world: &World, rays: &RayQueue, out: &mut Vec<HitPacket8>) 
     }));
 }
 
-/// Buffers reused by `shade_hits` from packet to packet.
-#[derive(Default)]
-struct Scratch {
-    shade: Shade8,
-}
-
 /// Rays that hit nothing take the background, times their weight.
 fn handle_escaped_rays(world: &World, rays: &RayQueue, hits: &[HitPacket8], accum: &mut [Vec3]) {
     for (p, h) in hits.iter().enumerate() {
@@ -202,7 +200,7 @@ fn shade_hits(
     shadows: &mut ShadowQueue,
     next: &mut RayQueue,
     counts: &mut [u64; 4],
-    scratch: &mut Scratch,
+    shaded: &mut Shade8,
 ) {
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
@@ -219,8 +217,8 @@ fn shade_hits(
         }
         let (packet, _) = rays.packet(start);
         let depth = rays.depth_lanes(start);
-        shade8(world, terms, &packet, h, mask, depth, &mut scratch.shade);
-        let s = &scratch.shade;
+        shade8(world, terms, &packet, h, mask, depth, shaded);
+        let s = &*shaded;
         add_lanes(accum, bits, pixel, &w.mul_elem(s.ambient));
         for l in &s.lights {
             let lit = simd::bitmask(l.lit);
