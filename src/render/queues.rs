@@ -162,15 +162,22 @@ impl RayQueue {
         self.depth.reserve(n);
     }
 
-    /// Reorder entries so rays with the same direction octant are adjacent (repacking for
-    /// coherence). A stable counting sort over the 3 sign bits; `spare` is scratch space.
-    pub fn bin_by_octant(&mut self, spare: &mut RayQueue) {
-        let oct = |i: usize| (0..3).fold(0usize, |b, k| b | ((self.d[k][i] < 0.0) as usize) << k);
-        let mut counts = [0usize; 9];
+    /// Reorder entries so that rays with the same direction octant and the same origin octant
+    /// (about the queue's mean origin) are adjacent: repacking for coherence. A stable
+    /// counting sort over the 64 keys; `spare` is scratch space.
+    pub fn bin_by_direction_and_origin(&mut self, spare: &mut RayQueue) {
+        let n = self.len().max(1) as f32;
+        let mean: [f32; 3] = std::array::from_fn(|k| self.o[k].iter().sum::<f32>() / n);
+        let key = |i: usize| {
+            let dir = (0..3).fold(0usize, |b, k| b | ((self.d[k][i] < 0.0) as usize) << k);
+            let side = (0..3).fold(0usize, |b, k| b | ((self.o[k][i] < mean[k]) as usize) << k);
+            dir * 8 + side
+        };
+        let mut counts = [0usize; 65];
         for i in 0..self.len() {
-            counts[oct(i) + 1] += 1;
+            counts[key(i) + 1] += 1;
         }
-        for b in 0..8 {
+        for b in 0..64 {
             counts[b + 1] += counts[b];
         }
         spare.clear();
@@ -185,7 +192,7 @@ impl RayQueue {
         spare.pixel.resize(self.len(), 0);
         spare.depth.resize(self.len(), 0);
         for i in 0..self.len() {
-            let b = oct(i);
+            let b = key(i);
             let j = counts[b];
             counts[b] += 1;
             for k in 0..3 {
@@ -286,7 +293,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn binning_groups_octants_stably() {
+    fn binning_groups_octants_and_origin_sides_stably() {
         let mut q = RayQueue::default();
         let dirs = [
             [1.0, 1.0, 1.0],
@@ -303,11 +310,24 @@ mod tests {
                 1,
             );
         }
-        q.bin_by_octant(&mut RayQueue::default());
+        q.bin_by_direction_and_origin(&mut RayQueue::default());
         assert_eq!(q.pixel, vec![0, 2, 1, 4, 3]);
         assert_eq!(q.ray(1).dir, Vec3::ONE);
         let (p, active) = q.packet(0);
         assert_eq!(simd::bitmask(active), 0b1_1111);
         assert_eq!(p.lane(4).dir, Vec3::splat(-1.0));
+
+        // one direction: grouped by the side of the mean origin, order kept within a side
+        let mut q = RayQueue::default();
+        for (k, x) in [1.0, -1.0, 1.0, -2.0].into_iter().enumerate() {
+            q.push(
+                &Ray::new(Vec3::new(x, 0.0, 0.0), Vec3::ONE, 0.0, 1.0),
+                k as u32,
+                Vec3::ONE,
+                1,
+            );
+        }
+        q.bin_by_direction_and_origin(&mut RayQueue::default());
+        assert_eq!(q.pixel, vec![0, 2, 1, 3]);
     }
 }
