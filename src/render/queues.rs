@@ -164,47 +164,54 @@ impl RayQueue {
 
     /// Reorder entries so that rays with the same direction octant and the same origin octant
     /// (about the queue's mean origin) are adjacent: repacking for coherence. A stable
-    /// counting sort over the 64 keys; `spare` is scratch space.
-    pub fn bin_by_direction_and_origin(&mut self, spare: &mut RayQueue) {
-        let n = self.len().max(1) as f32;
+    /// counting sort over the 64 keys.
+    pub fn bin_by_direction_and_origin(&mut self, scratch: &mut BinScratch) {
+        let len = self.len();
+        let n = len.max(1) as f32;
         let mean: [f32; 3] = std::array::from_fn(|k| self.o[k].iter().sum::<f32>() / n);
-        let key = |i: usize| {
-            let dir = (0..3).fold(0usize, |b, k| b | ((self.d[k][i] < 0.0) as usize) << k);
-            let side = (0..3).fold(0usize, |b, k| b | ((self.o[k][i] < mean[k]) as usize) << k);
+        let BinScratch { keys, perm, spare } = scratch;
+        keys.clear();
+        keys.extend((0..len).map(|i| {
+            let dir = (0..3).fold(0u8, |b, k| b | ((self.d[k][i] < 0.0) as u8) << k);
+            let side = (0..3).fold(0u8, |b, k| b | ((self.o[k][i] < mean[k]) as u8) << k);
             dir * 8 + side
-        };
-        let mut counts = [0usize; 65];
-        for i in 0..self.len() {
-            counts[key(i) + 1] += 1;
+        }));
+        let mut start = [0u32; 65];
+        for &k in keys.iter() {
+            start[k as usize + 1] += 1;
         }
         for b in 0..64 {
-            counts[b + 1] += counts[b];
+            start[b + 1] += start[b];
         }
-        spare.clear();
-        for v in spare
-            .o
-            .iter_mut()
-            .chain(&mut spare.d)
-            .chain(&mut spare.weight)
-        {
-            v.resize(self.len(), 0.0);
+        // the permutation: perm[j] = the entry that goes to position j
+        perm.clear();
+        perm.resize(len, 0);
+        for (i, &k) in keys.iter().enumerate() {
+            perm[start[k as usize] as usize] = i as u32;
+            start[k as usize] += 1;
         }
-        spare.pixel.resize(self.len(), 0);
-        spare.depth.resize(self.len(), 0);
-        for i in 0..self.len() {
-            let b = key(i);
-            let j = counts[b];
-            counts[b] += 1;
-            for k in 0..3 {
-                spare.o[k][j] = self.o[k][i];
-                spare.d[k][j] = self.d[k][i];
-                spare.weight[k][j] = self.weight[k][i];
-            }
-            spare.pixel[j] = self.pixel[i];
-            spare.depth[j] = self.depth[i];
+        // gather every field through it (sequential writes, no per-element resize)
+        fn gather<T: Copy>(out: &mut Vec<T>, from: &[T], perm: &[u32]) {
+            out.clear();
+            out.extend(perm.iter().map(|&i| from[i as usize]));
         }
+        for k in 0..3 {
+            gather(&mut spare.o[k], &self.o[k], perm);
+            gather(&mut spare.d[k], &self.d[k], perm);
+            gather(&mut spare.weight[k], &self.weight[k], perm);
+        }
+        gather(&mut spare.pixel, &self.pixel, perm);
+        gather(&mut spare.depth, &self.depth, perm);
         std::mem::swap(self, spare);
     }
+}
+
+/// Scratch space of `RayQueue::bin_by_direction_and_origin`, kept between calls.
+#[derive(Clone, Debug, Default)]
+pub struct BinScratch {
+    keys: Vec<u8>,
+    perm: Vec<u32>,
+    spare: RayQueue,
 }
 
 /// Shadow rays waiting for an any-hit query, each with the RGB contribution its pixel gets
@@ -310,7 +317,7 @@ mod tests {
                 1,
             );
         }
-        q.bin_by_direction_and_origin(&mut RayQueue::default());
+        q.bin_by_direction_and_origin(&mut BinScratch::default());
         assert_eq!(q.pixel, vec![0, 2, 1, 4, 3]);
         assert_eq!(q.ray(1).dir, Vec3::ONE);
         let (p, active) = q.packet(0);
@@ -327,7 +334,7 @@ mod tests {
                 1,
             );
         }
-        q.bin_by_direction_and_origin(&mut RayQueue::default());
+        q.bin_by_direction_and_origin(&mut BinScratch::default());
         assert_eq!(q.pixel, vec![0, 2, 1, 3]);
     }
 }

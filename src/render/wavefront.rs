@@ -7,7 +7,7 @@
 //! Queues are SoA and tile-local (kept in one `Workspace` per worker thread and reused from
 //! tile to tile), so memory does not grow with the image size.
 
-use super::queues::{RayQueue, ShadowQueue};
+use super::queues::{BinScratch, RayQueue, ShadowQueue};
 use super::{RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{intersect8, occluded8};
 use crate::camera::Camera;
@@ -36,7 +36,7 @@ pub struct Workspace {
     rays: RayQueue,
     next: RayQueue,
     shadows: ShadowQueue,
-    spare: RayQueue,
+    binning: BinScratch,
     hits: Vec<HitPacket8>,
     shade: Shade8,
     /// The tile's pixels, row-major.
@@ -61,7 +61,7 @@ pub fn render_tile(
         rays,
         next,
         shadows,
-        spare,
+        binning,
         hits,
         shade,
         accum,
@@ -108,7 +108,7 @@ pub fn render_tile(
         std::mem::swap(rays, next);
         next.clear();
         if BIN_SECONDARY {
-            rays.bin_by_direction_and_origin(spare);
+            rays.bin_by_direction_and_origin(binning);
         }
         phase_ns[3] += start.elapsed().as_nanos() as u64;
         generation += 1;
