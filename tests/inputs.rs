@@ -421,6 +421,70 @@ fn regression_obj_rewrite() {
     );
 }
 
+/// A BMP file header claiming `w` x `h` 24-bit pixels, with no pixel data.
+fn bmp_header(w: i32, h: i32) -> Vec<u8> {
+    let mut b = b"BM".to_vec();
+    for v in [54u32, 0, 54, 40] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(w.to_le_bytes());
+    b.extend(h.to_le_bytes());
+    b.extend(1u16.to_le_bytes());
+    b.extend(24u16.to_le_bytes());
+    b.extend([0u8; 24]);
+    b
+}
+
+/// The texture pixel cap is checked from the header: the production cap of 2^25 refuses
+/// 8192x4097 before decoding, and a caller's cap (the fuzz targets pass 2^16) lets exactly
+/// that many pixels through, for the image crate's formats and for EXR alike.
+#[test]
+fn texture_pixel_caps() {
+    use whitted::io::image::{MAX_TEXTURE_PIXELS, decode_texture, decode_texture_capped};
+    assert_eq!(MAX_TEXTURE_PIXELS, 1 << 25);
+    let e = decode_texture(&bmp_header(8192, 4097), Path::new("big.bmp")).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("big.bmp: ") && msg.contains("8192x4097") && msg.contains("33554432"),
+        "{msg}"
+    );
+
+    let dir = std::env::temp_dir().join(format!("whitted-caps-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let img = whitted::image::Image::new(17, 16);
+    for ext in ["png", "exr"] {
+        let path = dir.join(format!("t.{ext}"));
+        whitted::io::image::save_image(&img, &path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let (t, _) = decode_texture_capped(&bytes, &path, 17 * 16).unwrap();
+        assert_eq!((t.width, t.height), (17, 16));
+        let e = decode_texture_capped(&bytes, &path, 17 * 16 - 1).unwrap_err();
+        assert!(e.to_string().contains("the cap is 271 pixels"), "{e}");
+        decode_texture(&bytes, &path).unwrap();
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The fuzz targets decode with a cap of 2^16 pixels: 256x256 passes, 257x256 does not.
+#[test]
+fn fuzz_targets_pixel_cap() {
+    assert_eq!(fuzz::FUZZ_MAX_PIXELS, 1 << 16);
+    let dir = std::env::temp_dir().join(format!("whitted-fuzzcap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (w, ok) in [(256, true), (257, false)] {
+        let path = dir.join(format!("{w}.png"));
+        whitted::io::image::save_image(&whitted::image::Image::new(w, 256), &path).unwrap();
+        // First byte 0 picks PNG.
+        let input = [&[0u8][..], &std::fs::read(&path).unwrap()].concat();
+        let r = fuzz::image(&input);
+        assert_eq!(r.is_ok(), ok, "{w}x256: {r:?}");
+        if let Err(e) = r {
+            assert!(e.to_string().contains("the cap is 65536 pixels"), "{e}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `/dev/zero` as a texture or mesh would be read forever.
 #[test]
 fn regression_device_files_are_refused() {
