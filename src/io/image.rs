@@ -59,23 +59,23 @@ pub fn decode_texture_capped(
     if format == image::ImageFormat::Jpeg && !jpeg_is_complete(bytes) {
         return Err(Error::image(path, "truncated JPEG: no end-of-image marker"));
     }
-    let reader = || {
-        let mut r = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-        // Keep the image crate's default memory limits and add a size cap of our own.
-        let mut limits = image::Limits::default();
-        limits.max_image_width = Some(1 << 16);
-        limits.max_image_height = Some(1 << 16);
-        r.limits(limits);
-        r
-    };
-    // The header alone first: an absurd size is refused before anything is allocated.
-    let (w, h) = reader()
-        .into_dimensions()
-        .map_err(|e| Error::image(path, format!("cannot decode: {e}")))?;
+    use image::ImageDecoder;
+    let bad = |e: image::ImageError| Error::image(path, format!("cannot decode: {e}"));
+    // Keep the image crate's default memory limits and add a size cap of our own.
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(1 << 16);
+    limits.max_image_height = Some(1 << 16);
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    reader.limits(limits.clone());
+    // One decoder, so the header is parsed once (a JPEG's Huffman tables, a PNG's chunks up
+    // to the pixels); an absurd size is refused from it before anything is allocated.
+    let mut decoder = reader.into_decoder().map_err(bad)?;
+    let (w, h) = decoder.dimensions();
     check_texture_size(w as u64, h as u64, max_pixels, path)?;
-    let img = reader()
-        .decode()
-        .map_err(|e| Error::image(path, format!("cannot decode: {e}")))?;
+    // What `ImageReader::decode` does: the pixel buffer counts against the memory limit.
+    limits.reserve(decoder.total_bytes()).map_err(bad)?;
+    decoder.set_limits(limits).map_err(bad)?;
+    let img = image::DynamicImage::from_decoder(decoder).map_err(bad)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     check_texture_size(w as u64, h as u64, max_pixels, path)?;
     let color = img.color();
