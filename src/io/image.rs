@@ -90,7 +90,7 @@ pub fn decode_texture_capped(
         img,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
     ) {
-        img.to_rgb32f()
+        img.into_rgb32f()
             .pixels()
             .map(|p| Vec3::from(p.0.map(|c| if c.is_finite() { c } else { 0.0 })))
             .collect()
@@ -98,12 +98,12 @@ pub fn decode_texture_capped(
         let lut: Vec<f32> = (0..256)
             .map(|v| srgb_decode(v as f64 / 255.0) as f32)
             .collect();
-        img.to_rgb8()
+        img.into_rgb8()
             .pixels()
             .map(|p| p.0.map(|c| lut[c as usize]).into())
             .collect()
     } else {
-        img.to_rgb32f()
+        img.into_rgb32f()
             .pixels()
             .map(|p| Vec3::from(p.0.map(|c| srgb_decode(c as f64) as f32)))
             .collect()
