@@ -130,8 +130,17 @@ fn fuzz_corpus_cubemap() {
         let name = p.file_name().unwrap().to_str().unwrap();
         assert_eq!(r.is_ok(), name.starts_with("ok_"), "{name}: {r:?}");
         if let Err(e) = r {
+            // Hand-made seeds break the last face; fuzzer finds (`regress_*`) break any.
             let msg = e.to_string();
-            assert!(msg.contains("negz"), "error names the bad face: {msg}");
+            let faces: &[&str] = if name.starts_with("regress_") {
+                &whitted::texture::CUBE_FACES
+            } else {
+                &["negz"]
+            };
+            assert!(
+                faces.iter().any(|f| msg.contains(f)),
+                "error names the bad face: {msg}"
+            );
         }
     }
 }
@@ -398,6 +407,25 @@ fn regression_fuzz_scene_zero_size_shape_normals() {
     }
 }
 
+/// Found by the cubemap fuzzer (`attempt to multiply with overflow` in zune-jpeg 0.5.15,
+/// `bitstream.rs:400`): a JPEG whose DC differences keep adding up overflows the decoder's
+/// `dc_prediction * qt_table[0]` (zune-image#382). A release build wraps; a debug build and
+/// the fuzz build panicked. zune-jpeg is now built without overflow checks in every profile
+/// (`Cargo.toml`, `fuzz/Cargo.toml`), so this test means something in a debug build.
+#[test]
+fn regression_fuzz_cubemap_jpeg_dc_overflow() {
+    let face = include_bytes!("../fuzz/corpus/image/regress_jpeg_dc_overflow.jpg");
+    // First byte 1 picks JPEG; the rest is a 611-byte JPEG of 2x4354 pixels.
+    assert_eq!(face[0], 1);
+    fuzz::image(face).unwrap();
+    let cube = include_bytes!("../fuzz/corpus/cubemap/regress_jpeg_dc_overflow");
+    let e = fuzz::cubemap(cube).unwrap_err().to_string();
+    assert!(
+        e.contains("cube/posx.jpg") && e.contains("not square"),
+        "{e}"
+    );
+}
+
 /// A TOML error span inside a multi-byte character must not panic the line/column count.
 #[test]
 fn regression_error_position_in_multibyte_text() {
@@ -419,6 +447,70 @@ fn regression_obj_rewrite() {
         e.to_string().contains(":5:") && e.to_string().contains("vt index -2"),
         "{e}"
     );
+}
+
+/// A BMP file header claiming `w` x `h` 24-bit pixels, with no pixel data.
+fn bmp_header(w: i32, h: i32) -> Vec<u8> {
+    let mut b = b"BM".to_vec();
+    for v in [54u32, 0, 54, 40] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(w.to_le_bytes());
+    b.extend(h.to_le_bytes());
+    b.extend(1u16.to_le_bytes());
+    b.extend(24u16.to_le_bytes());
+    b.extend([0u8; 24]);
+    b
+}
+
+/// The texture pixel cap is checked from the header: the production cap of 2^25 refuses
+/// 8192x4097 before decoding, and a caller's cap (the fuzz targets pass 2^14) lets exactly
+/// that many pixels through, for the image crate's formats and for EXR alike.
+#[test]
+fn texture_pixel_caps() {
+    use whitted::io::image::{MAX_TEXTURE_PIXELS, decode_texture, decode_texture_capped};
+    assert_eq!(MAX_TEXTURE_PIXELS, 1 << 25);
+    let e = decode_texture(&bmp_header(8192, 4097), Path::new("big.bmp")).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("big.bmp: ") && msg.contains("8192x4097") && msg.contains("33554432"),
+        "{msg}"
+    );
+
+    let dir = std::env::temp_dir().join(format!("whitted-caps-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let img = whitted::image::Image::new(17, 16);
+    for ext in ["png", "exr"] {
+        let path = dir.join(format!("t.{ext}"));
+        whitted::io::image::save_image(&img, &path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let (t, _) = decode_texture_capped(&bytes, &path, 17 * 16).unwrap();
+        assert_eq!((t.width, t.height), (17, 16));
+        let e = decode_texture_capped(&bytes, &path, 17 * 16 - 1).unwrap_err();
+        assert!(e.to_string().contains("the cap is 271 pixels"), "{e}");
+        decode_texture(&bytes, &path).unwrap();
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The fuzz targets decode with a cap of 2^14 pixels: 128x128 passes, 129x128 does not.
+#[test]
+fn fuzz_targets_pixel_cap() {
+    assert_eq!(fuzz::FUZZ_MAX_PIXELS, 1 << 14);
+    let dir = std::env::temp_dir().join(format!("whitted-fuzzcap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (w, ok) in [(128, true), (129, false)] {
+        let path = dir.join(format!("{w}.png"));
+        whitted::io::image::save_image(&whitted::image::Image::new(w, 128), &path).unwrap();
+        // First byte 0 picks PNG.
+        let input = [&[0u8][..], &std::fs::read(&path).unwrap()].concat();
+        let r = fuzz::image(&input);
+        assert_eq!(r.is_ok(), ok, "{w}x128: {r:?}");
+        if let Err(e) = r {
+            assert!(e.to_string().contains("the cap is 16384 pixels"), "{e}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `/dev/zero` as a texture or mesh would be read forever.

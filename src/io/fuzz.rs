@@ -3,7 +3,7 @@
 //! hang or allocate without bound; an `Err` is a fine outcome.
 
 use crate::error::{Error, Result};
-use crate::io::image::{decode_cubemap, decode_texture};
+use crate::io::image::{decode_cubemap_capped, decode_texture_capped};
 use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
 use crate::io::{mfile, obj};
 use std::path::{Path, PathBuf};
@@ -43,7 +43,18 @@ pub fn scene(data: &[u8], empty_dir: &Path) -> Result<()> {
 /// name matters).
 pub const IMAGE_EXTENSIONS: [&str; 6] = ["png", "jpg", "tga", "bmp", "hdr", "exr"];
 
+/// The pixel cap the image and cube-map targets decode with, instead of the production
+/// [`MAX_TEXTURE_PIXELS`](crate::io::image::MAX_TEXTURE_PIXELS) of 2^25: a few hundred bytes
+/// of JPEG can claim a 16M-pixel image, and filling it took half a second per run, so the
+/// targets ran at 1k executions a second. At 2^16 the fuzzer soon found JPEGs of 14852x4
+/// (with large sampling factors, so the decoder works on padded blocks) at 10-25 ms each and
+/// slowed to under 3k a second; 2^14 pixels (128x128, or a side up to 16384 long) keeps every
+/// decoder path reachable at tens of microseconds a run. The cap check is the same code with
+/// either value and is tested on its own (`tests/inputs.rs`).
+pub const FUZZ_MAX_PIXELS: u64 = 1 << 14;
+
 /// One texture decode: the first byte picks the file extension, the rest is the file.
+/// Images over [`FUZZ_MAX_PIXELS`] are refused.
 pub fn image(data: &[u8]) -> Result<()> {
     let (&pick, bytes) = data
         .split_first()
@@ -52,7 +63,7 @@ pub fn image(data: &[u8]) -> Result<()> {
         "fuzz.{}",
         IMAGE_EXTENSIONS[pick as usize % IMAGE_EXTENSIONS.len()]
     );
-    let (tex, info) = decode_texture(bytes, Path::new(&name))?;
+    let (tex, info) = decode_texture_capped(bytes, Path::new(&name), FUZZ_MAX_PIXELS)?;
     assert_eq!(tex.texels.len(), tex.width * tex.height);
     assert!(info.width > 0 && info.height > 0);
     assert!(tex.texels.iter().all(|t| t.is_finite()));
@@ -63,7 +74,8 @@ pub fn image(data: &[u8]) -> Result<()> {
 pub const FACE_SEPARATOR: &[u8] = b"--face--";
 
 /// A cube map from six face files: the first byte picks the extension (as for [`image`]),
-/// the rest is split on [`FACE_SEPARATOR`] into posx, negx, posy, negy, posz, negz.
+/// the rest is split on [`FACE_SEPARATOR`] into posx, negx, posy, negy, posz, negz. Faces
+/// over [`FUZZ_MAX_PIXELS`] are refused.
 pub fn cubemap(data: &[u8]) -> Result<()> {
     let (&pick, rest) = data
         .split_first()
@@ -75,7 +87,7 @@ pub fn cubemap(data: &[u8]) -> Result<()> {
         PathBuf::from(format!("cube/{}.{ext}", crate::texture::CUBE_FACES[k]))
     });
     let faces = std::array::from_fn(|k| (names[k].as_path(), parts[k]));
-    let (cube, _) = decode_cubemap(faces)?;
+    let (cube, _) = decode_cubemap_capped(faces, FUZZ_MAX_PIXELS)?;
     let w = cube.faces[0].width;
     assert!(cube.faces.iter().all(|f| f.width == w && f.height == w));
     Ok(())

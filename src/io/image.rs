@@ -32,9 +32,21 @@ pub fn load_texture(path: &Path) -> Result<Texture> {
 /// [`load_texture`] on bytes already read; `path` names the file in messages and gives the
 /// format when the bytes do not (TGA has no signature).
 pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
+    decode_texture_capped(bytes, path, MAX_TEXTURE_PIXELS)
+}
+
+/// [`decode_texture`] with a pixel cap of the caller's choosing instead of
+/// [`MAX_TEXTURE_PIXELS`]. The fuzz targets use a small one: a 700-byte JPEG whose header
+/// claims 65531x252 decodes to 16M pixels (half a second and 250 MB), which is the cap
+/// working as meant but makes fuzzing crawl.
+pub fn decode_texture_capped(
+    bytes: &[u8],
+    path: &Path,
+    max_pixels: u64,
+) -> Result<(Texture, ImageInfo)> {
     let ext = crate::io::extension(path);
     if bytes.starts_with(&EXR_MAGIC) || (ext == "exr" && !bytes.is_empty()) {
-        return decode_exr(bytes, path);
+        return decode_exr(bytes, path, max_pixels);
     }
     let format = image::guess_format(bytes)
         .map_err(|_| {
@@ -47,25 +59,25 @@ pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)>
     if format == image::ImageFormat::Jpeg && !jpeg_is_complete(bytes) {
         return Err(Error::image(path, "truncated JPEG: no end-of-image marker"));
     }
-    let reader = || {
-        let mut r = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-        // Keep the image crate's default memory limits and add a size cap of our own.
-        let mut limits = image::Limits::default();
-        limits.max_image_width = Some(1 << 16);
-        limits.max_image_height = Some(1 << 16);
-        r.limits(limits);
-        r
-    };
-    // The header alone first: an absurd size is refused before anything is allocated.
-    let (w, h) = reader()
-        .into_dimensions()
-        .map_err(|e| Error::image(path, format!("cannot decode: {e}")))?;
-    check_texture_size(w as u64, h as u64, path)?;
-    let img = reader()
-        .decode()
-        .map_err(|e| Error::image(path, format!("cannot decode: {e}")))?;
+    use image::ImageDecoder;
+    let bad = |e: image::ImageError| Error::image(path, format!("cannot decode: {e}"));
+    // Keep the image crate's default memory limits and add a size cap of our own.
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(1 << 16);
+    limits.max_image_height = Some(1 << 16);
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    reader.limits(limits.clone());
+    // One decoder, so the header is parsed once (a JPEG's Huffman tables, a PNG's chunks up
+    // to the pixels); an absurd size is refused from it before anything is allocated.
+    let mut decoder = reader.into_decoder().map_err(bad)?;
+    let (w, h) = decoder.dimensions();
+    check_texture_size(w as u64, h as u64, max_pixels, path)?;
+    // What `ImageReader::decode` does: the pixel buffer counts against the memory limit.
+    limits.reserve(decoder.total_bytes()).map_err(bad)?;
+    decoder.set_limits(limits).map_err(bad)?;
+    let img = image::DynamicImage::from_decoder(decoder).map_err(bad)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    check_texture_size(w as u64, h as u64, path)?;
+    check_texture_size(w as u64, h as u64, max_pixels, path)?;
     let color = img.color();
     let info = ImageInfo {
         format: format!("{format:?}").to_ascii_lowercase(),
@@ -78,7 +90,7 @@ pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)>
         img,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
     ) {
-        img.to_rgb32f()
+        img.into_rgb32f()
             .pixels()
             .map(|p| Vec3::from(p.0.map(|c| if c.is_finite() { c } else { 0.0 })))
             .collect()
@@ -86,12 +98,12 @@ pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)>
         let lut: Vec<f32> = (0..256)
             .map(|v| srgb_decode(v as f64 / 255.0) as f32)
             .collect();
-        img.to_rgb8()
+        img.into_rgb8()
             .pixels()
             .map(|p| p.0.map(|c| lut[c as usize]).into())
             .collect()
     } else {
-        img.to_rgb32f()
+        img.into_rgb32f()
             .pixels()
             .map(|p| Vec3::from(p.0.map(|c| srgb_decode(c as f64) as f32)))
             .collect()
@@ -101,11 +113,11 @@ pub fn decode_texture(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)>
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
-fn check_texture_size(w: u64, h: u64, path: &Path) -> Result<()> {
-    if w == 0 || h == 0 || w.saturating_mul(h) > MAX_TEXTURE_PIXELS {
+fn check_texture_size(w: u64, h: u64, max_pixels: u64, path: &Path) -> Result<()> {
+    if w == 0 || h == 0 || w.saturating_mul(h) > max_pixels {
         return Err(Error::image(
             path,
-            format!("unusable size {w}x{h} (the cap is {MAX_TEXTURE_PIXELS} pixels)"),
+            format!("unusable size {w}x{h} (the cap is {max_pixels} pixels)"),
         ));
     }
     Ok(())
@@ -122,7 +134,7 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
     end >= 2 && bytes[end - 2..end] == [0xFF, 0xD9]
 }
 
-fn decode_exr(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
+fn decode_exr(bytes: &[u8], path: &Path, max_pixels: u64) -> Result<(Texture, ImageInfo)> {
     use exr::prelude::{ReadChannels, ReadLayers, read};
     let bad = |e: exr::error::Error| Error::image(path, format!("cannot read EXR: {e}"));
     let meta =
@@ -134,7 +146,7 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<(Texture, ImageInfo)> {
     // Every layer's size is checked: the reader may pick any of them.
     for header in &meta.headers {
         let size = header.layer_size;
-        check_texture_size(size.0 as u64, size.1 as u64, path)?;
+        check_texture_size(size.0 as u64, size.1 as u64, max_pixels, path)?;
     }
     let info = ImageInfo {
         format: "exr".into(),
@@ -215,10 +227,19 @@ pub fn load_cubemap_info(dir: &Path) -> Result<(CubeMap, ImageInfo)> {
 /// Decode six face files, in [`CUBE_FACES`] order, given as (name for messages, bytes), and
 /// check them: square, one size. Errors name the bad face.
 pub fn decode_cubemap(faces: [(&Path, &[u8]); 6]) -> Result<(CubeMap, ImageInfo)> {
+    decode_cubemap_capped(faces, MAX_TEXTURE_PIXELS)
+}
+
+/// [`decode_cubemap`] with a per-face pixel cap of the caller's choosing (see
+/// [`decode_texture_capped`]).
+pub fn decode_cubemap_capped(
+    faces: [(&Path, &[u8]); 6],
+    max_pixels: u64,
+) -> Result<(CubeMap, ImageInfo)> {
     let mut out: Vec<Texture> = Vec::with_capacity(6);
     let mut first_info = None;
     for (name, (file, bytes)) in CUBE_FACES.iter().zip(faces) {
-        let (tex, info) = decode_texture(bytes, file)?;
+        let (tex, info) = decode_texture_capped(bytes, file, max_pixels)?;
         if tex.width != tex.height {
             return Err(Error::image(
                 file,
@@ -289,7 +310,7 @@ pub fn save_image(image: &Image, path: &Path) -> Result<()> {
 /// Read a linear RGB EXR back (for tests and comparisons).
 pub fn load_exr_image(path: &Path) -> Result<Image> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let (t, _) = decode_exr(&bytes, path)?;
+    let (t, _) = decode_exr(&bytes, path, MAX_TEXTURE_PIXELS)?;
     Ok(Image {
         width: t.width,
         height: t.height,
