@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
-use whitted::render::{Settings, Stage, World, check_work, render};
+use whitted::render::{MAX_SAMPLE_SECONDARY_RAYS, Settings, Stage, World, render};
 use whitted::{Error, Result, scenes};
 
 #[derive(Parser)]
@@ -279,7 +279,6 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         spp: args.spp,
         engine,
     };
-    check_work(&scene, &settings).map_err(|e| Error::scene(&path, e))?;
     let world = World::new(scene);
     let (w, h) = (world.scene.width, world.scene.height);
     let bar = if args.quiet {
@@ -296,6 +295,17 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     };
     let (image, stats) = render(&world, &settings, &|n| bar.inc(n));
     bar.finish_and_clear();
+    if let Some((x, y)) = stats.over_budget_pixel(w) {
+        return Err(Error::scene(
+            &path,
+            format!(
+                "pixel ({x}, {y}): a camera sample spawned over {MAX_SAMPLE_SECONDARY_RAYS} \
+                 reflection and refraction rays (render.depth {}): rays are trapped between \
+                 surfaces that both reflect and refract; lower render.depth (--depth)",
+                settings.depth(&world.scene)
+            ),
+        ));
+    }
     whitted::io::image::save_image(&image, &out)?;
     if !args.quiet {
         let r = &stats.rays;

@@ -121,6 +121,8 @@ fn trace_rays_writes_one_record_per_ray_and_engines_agree() {
 fn bad_input_is_one_line_error_with_exit_code_2() {
     let bad = tmp("bad.toml");
     std::fs::write(&bad, "[image]\nwidth = 4\nheight = 3\nbogus = 1\n").unwrap();
+    let trap = tmp("trap.toml");
+    std::fs::write(&trap, TRAP).unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
         (
             vec!["render".into(), bad.display().to_string(), "-q".into()],
@@ -142,14 +144,28 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
             "over the cap",
         ),
         (
-            // glass that also mirrors, 64 bounces: 2^65 rays per sample in the worst case
+            // inside a closed box whose walls both mirror and refract, 64 bounces: every
+            // sample's ray tree doubles per bounce (2^65 rays); refused within the budget
             vec![
                 "render".into(),
-                "demo".into(),
-                "--depth".into(),
-                "64".into(),
+                trap.display().to_string(),
+                "-q".into(),
+                "-o".into(),
+                tmp("trap.png").display().to_string(),
             ],
-            "over the cap of 2^38",
+            "rays are trapped",
+        ),
+        (
+            vec![
+                "render".into(),
+                trap.display().to_string(),
+                "--engine".into(),
+                "scalar".into(),
+                "-q".into(),
+                "-o".into(),
+                tmp("trap.png").display().to_string(),
+            ],
+            "rays are trapped",
         ),
         (
             vec![
@@ -190,5 +206,55 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
             1,
             "{args:?}: one line: {stderr}"
         );
+    }
+}
+
+/// A camera inside a closed cube whose walls reflect and refract (`ks = kt = 0.5`), culling
+/// off, depth 64.
+const TRAP: &str = r#"
+[image]
+width = 32
+height = 24
+[camera]
+eye = [0, 0, 0]
+look_at = [0, 0, -1]
+vfov = 60
+[render]
+depth = 64
+cull_backfaces = false
+[background]
+color = [0.1, 0.2, 0.3]
+[[light]]
+position = [0.2, 0.3, 0.1]
+intensity = [1, 1, 1]
+[[material]]
+name = "glassmirror"
+color = [0.8, 0.8, 0.8]
+ka = 0.1
+kd = 0.2
+ks = 0.5
+kt = 0.5
+ior = 1.5
+n = 20
+[[mesh]]
+material = "glassmirror"
+shape = "cube"
+"#;
+
+/// Deep recursion is fine where rays escape: the demo's glass ball and mirror at depth 64
+/// render (the ray-tree budget only stops trapped rays).
+#[test]
+fn deep_recursion_renders_where_rays_escape() {
+    let out = tmp("deep.png");
+    for engine in ["packet", "scalar"] {
+        let r = whitted()
+            .args([
+                "render", "demo", "--depth", "64", "--width", "48", "--height", "36",
+            ])
+            .args(["--engine", engine, "-q", "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     }
 }

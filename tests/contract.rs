@@ -358,27 +358,3 @@ fn shade8_lanes_equal_the_scalar_shading_bit_for_bit() {
     }
     assert!(lanes_checked > 10_000, "{lanes_checked} lanes checked");
 }
-
-/// The worst-case ray bound behind `whitted render`'s refusal of exponential ray trees.
-#[test]
-fn worst_case_rays_counts_full_ray_trees() {
-    use whitted::render::{MAX_WORST_CASE_RAYS, Settings, check_work, worst_case_rays};
-    // phong: only reflection (one child per hit), depth 1, two lights.
-    let w = world("phong", 40, 30);
-    let s = Settings::default();
-    assert_eq!(worst_case_rays(&w.scene, &s), 1200.0 * 2.0 * 3.0);
-    // refraction: ks and kt > 0, depth 6: 127 rays per sample tree.
-    let w = world("refraction", 40, 30);
-    assert_eq!(worst_case_rays(&w.scene, &s), 1200.0 * 127.0 * 3.0);
-    assert!(check_work(&w.scene, &s).is_ok());
-    let deep = Settings {
-        depth: Some(64),
-        ..s
-    };
-    assert!(worst_case_rays(&w.scene, &deep) > MAX_WORST_CASE_RAYS);
-    let e = check_work(&w.scene, &deep).unwrap_err();
-    assert!(e.contains("depth 64") && e.contains("'kitten'"), "{e}");
-    // The 8K refraction render of the README stays allowed, even at 16 spp.
-    let w = world("refraction", 7680, 4320);
-    assert!(check_work(&w.scene, &Settings { spp: 16, ..s }).is_ok());
-}

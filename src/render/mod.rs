@@ -109,53 +109,12 @@ impl Settings {
     }
 }
 
-/// The most rays a render may trace in the worst case ([`worst_case_rays`]): 2^38, a few
-/// hours on two cores. Over it, `whitted render` refuses to start rather than run for days.
-pub const MAX_WORST_CASE_RAYS: f64 = (1u64 << 38) as f64;
-
-/// An upper bound on the rays a render traces: every camera sample's ray tree full to the
-/// depth (two children per hit when some material both reflects and refracts, one when
-/// materials only reflect or only refract), and one shadow ray per light at every hit.
-/// Real renders trace far fewer (rays escape); the bound is what makes `depth = 64` with
-/// glass that also mirrors (2^65 rays per sample) an error instead of a hang.
-pub fn worst_case_rays(scene: &Scene, settings: &Settings) -> f64 {
-    let depth = settings.depth(scene);
-    let m = &scene.materials;
-    let branching = if m.iter().any(|m| m.ks > 0.0 && m.kt > 0.0) {
-        2.0
-    } else if m.iter().any(|m| m.ks > 0.0 || m.kt > 0.0) {
-        1.0
-    } else {
-        0.0
-    };
-    let tree: f64 = (0..=depth).map(|g| f64::powi(branching, g as i32)).sum();
-    let samples = scene.width as f64 * scene.height as f64 * settings.spp.max(1) as f64;
-    samples * tree * (1 + scene.lights.len()) as f64
-}
-
-/// `Err` with a sentence naming the size, samples and depth when [`worst_case_rays`] is over
-/// [`MAX_WORST_CASE_RAYS`].
-pub fn check_work(scene: &Scene, settings: &Settings) -> Result<(), String> {
-    let rays = worst_case_rays(scene, settings);
-    if rays <= MAX_WORST_CASE_RAYS {
-        return Ok(());
-    }
-    let both = scene
-        .materials
-        .iter()
-        .find(|m| m.ks > 0.0 && m.kt > 0.0)
-        .map_or(String::new(), |m| {
-            format!(", material '{}' both reflects and refracts", m.name)
-        });
-    Err(format!(
-        "up to {rays:.3e} rays ({}x{}, {} spp, depth {}{both}) is over the cap of 2^38; \
-         lower render.depth (--depth), the size or --spp",
-        scene.width,
-        scene.height,
-        settings.spp.max(1),
-        settings.depth(scene),
-    ))
-}
+/// The most reflection and refraction rays one camera sample's ray tree may spawn. A tree
+/// only grows exponentially where rays are trapped (say, mirror-and-glass walls around the
+/// camera at `depth = 64`: 2^65 rays per sample); real scenes need far fewer (`refraction`
+/// at most 126, a glass sphere at depth 64 about 130). Past it, both engines stop and the
+/// render fails with [`RenderStats::over_budget`] set instead of running for days.
+pub const MAX_SAMPLE_SECONDARY_RAYS: u32 = 1 << 14;
 
 /// A scene ready to render: flattened geometry, its BVH, the offset `eps`.
 pub struct World {
@@ -214,6 +173,30 @@ pub struct RenderStats {
     /// Summed thread time (ns) per phase: primary intersection, shading, shadow rays,
     /// secondary intersection (wavefront engine only).
     pub phase_ns: [AtomicU64; 4],
+    /// `y * width + x + 1` of a pixel whose sample passed [`MAX_SAMPLE_SECONDARY_RAYS`]
+    /// (0: none). Once set, the render stops early and its image must not be used.
+    pub over_budget: AtomicU64,
+}
+
+impl RenderStats {
+    /// The pixel whose ray tree passed the budget, if any.
+    pub fn over_budget_pixel(&self, width: u32) -> Option<(u32, u32)> {
+        match self.over_budget.load(Ordering::Relaxed) {
+            0 => None,
+            k => Some((
+                ((k - 1) % width as u64) as u32,
+                ((k - 1) / width as u64) as u32,
+            )),
+        }
+    }
+
+    /// Record that the sample at `(x, y)` passed the budget (the first report wins).
+    pub fn set_over_budget(&self, x: u32, y: u32, width: u32) {
+        let k = y as u64 * width as u64 + x as u64 + 1;
+        let _ = self
+            .over_budget
+            .compare_exchange(0, k, Ordering::Relaxed, Ordering::Relaxed);
+    }
 }
 
 impl RenderStats {
@@ -254,6 +237,9 @@ pub fn render(
         .for_each_init(wavefront::Workspace::default, |ws, (band, rows)| {
             let y0 = band as u32 * TILE;
             for x0 in (0..w).step_by(TILE as usize) {
+                if stats.over_budget.load(Ordering::Relaxed) != 0 {
+                    return; // the render has failed; stop tracing
+                }
                 let scalar;
                 let pixels: &[Vec3] = match settings.engine {
                     Engine::Packet => {
@@ -261,8 +247,7 @@ pub fn render(
                         &ws.accum
                     }
                     Engine::Scalar => {
-                        scalar =
-                            recursive::render_tile(world, settings, &offsets, x0, y0, &stats.rays);
+                        scalar = recursive::render_tile(world, settings, &offsets, x0, y0, &stats);
                         &scalar
                     }
                 };

@@ -1,14 +1,23 @@
 //! The scalar reference renderer: `trace1(ray, depth)` recursion over `intersect1` / `occluded1`.
 
-use super::{RayCounts, Settings, Terms, World, tile_end};
+use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::intersect1;
 use crate::ray::Ray;
 use crate::shade::{SecondaryKind, shade1};
 use glam::Vec3;
 use std::sync::atomic::Ordering;
 
-/// Colour seen along `ray` with `depth` bounces left.
-pub fn trace1(world: &World, terms: Terms, ray: &Ray, depth: u32, counts: &mut [u64; 4]) -> Vec3 {
+/// Colour seen along `ray` with `depth` bounces left. `budget` is what the camera sample may
+/// still spawn in reflection and refraction rays; when a ray would pass it, the sample is
+/// abandoned (`budget` becomes `None`) and so is the render (`MAX_SAMPLE_SECONDARY_RAYS`).
+pub fn trace1(
+    world: &World,
+    terms: Terms,
+    ray: &Ray,
+    depth: u32,
+    counts: &mut [u64; 4],
+    budget: &mut Option<u32>,
+) -> Vec3 {
     let Some(hit) = intersect1(&world.accel, ray, world.scene.cull_backfaces) else {
         return world.scene.background.sample(ray.dir);
     };
@@ -17,8 +26,15 @@ pub fn trace1(world: &World, terms: Terms, ray: &Ray, depth: u32, counts: &mut [
     }
     let (mut color, secondaries) = shade1(world, terms, ray, &hit, depth, &mut counts[1]);
     for s in secondaries.into_iter().flatten() {
+        match budget {
+            Some(0) | None => {
+                *budget = None;
+                return color;
+            }
+            Some(b) => *b -= 1,
+        }
         counts[2 + (s.kind == SecondaryKind::Refraction) as usize] += 1;
-        color += s.weight * trace1(world, terms, &s.ray, depth - 1, counts);
+        color += s.weight * trace1(world, terms, &s.ray, depth - 1, counts, budget);
     }
     color
 }
@@ -30,7 +46,7 @@ pub fn render_tile(
     offsets: &[(f32, f32)],
     x0: u32,
     y0: u32,
-    rays: &RayCounts,
+    stats: &RenderStats,
 ) -> Vec<Vec3> {
     let camera = world.scene.camera();
     let terms = Terms::of(settings.stage);
@@ -45,11 +61,16 @@ pub fn render_tile(
             for &(dx, dy) in offsets {
                 let ray = camera.ray_at(i as f32 + dx, j as f32 + dy);
                 counts[0] += 1;
-                c += trace1(world, terms, &ray, depth, &mut counts);
+                let mut budget = Some(MAX_SAMPLE_SECONDARY_RAYS);
+                c += trace1(world, terms, &ray, depth, &mut counts, &mut budget);
+                if budget.is_none() {
+                    stats.set_over_budget(i, j, camera.width);
+                }
             }
             out.push(c * scale);
         }
     }
+    let rays = &stats.rays;
     for (a, c) in [
         &rays.primary,
         &rays.shadow,

@@ -8,7 +8,7 @@
 //! tile to tile), so memory does not grow with the image size.
 
 use super::queues::{BinScratch, RayQueue, ShadowQueue};
-use super::{RenderStats, Settings, Terms, World, tile_end};
+use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{intersect8, occluded8};
 use crate::camera::Camera;
 use crate::packet::{HitPacket8, PacketShape, camera_packet};
@@ -39,6 +39,8 @@ pub struct Workspace {
     binning: BinScratch,
     hits: Vec<HitPacket8>,
     shade: Shade8,
+    /// Reflection and refraction rays spawned so far per pixel of the tile (the budget).
+    tree: Vec<u32>,
     /// The tile's pixels, row-major.
     pub accum: Vec<Vec3>,
 }
@@ -64,10 +66,15 @@ pub fn render_tile(
         binning,
         hits,
         shade,
+        tree,
         accum,
     } = ws;
     accum.clear();
     accum.resize(((x1 - x0) * (y1 - y0)) as usize, Vec3::ZERO);
+    tree.clear();
+    tree.resize(accum.len(), 0);
+    // per pixel, since the samples of a pixel share its queue entries
+    let budget = MAX_SAMPLE_SECONDARY_RAYS.saturating_mul(offsets.len() as u32);
     rays.clear();
     next.clear();
     shadows.clear();
@@ -84,7 +91,7 @@ pub fn render_tile(
 
         let start = Instant::now();
         handle_escaped_rays(world, rays, hits, accum);
-        shade_hits(
+        let over = shade_hits(
             world,
             terms,
             rays,
@@ -94,8 +101,14 @@ pub fn render_tile(
             next,
             &mut counts,
             shade,
+            (tree, budget),
         );
         phase_ns[1] += start.elapsed().as_nanos() as u64;
+        if let Some(pixel) = over {
+            let tw = x1 - x0;
+            stats.set_over_budget(x0 + pixel % tw, y0 + pixel / tw, camera.width);
+            break; // the render has failed; the tile's pixels will not be used
+        }
 
         let start = Instant::now();
         counts[1] += shadows.len() as u64;
@@ -192,7 +205,8 @@ fn handle_escaped_rays(world: &World, rays: &RayQueue, hits: &[HitPacket8], accu
 
 /// Whitted's equation at every hit (`shade8`): ambient straight into the pixel, one shadow
 /// ray per lit hit and light into the shadow queue, reflection and refraction rays into `next`
-/// (each packet's surviving lanes appended densely: the repacking).
+/// (each packet's surviving lanes appended densely: the repacking). Returns the tile pixel
+/// whose reflection and refraction rays would pass `budget`, if one does.
 #[allow(clippy::too_many_arguments)]
 fn shade_hits(
     world: &World,
@@ -204,7 +218,8 @@ fn shade_hits(
     next: &mut RayQueue,
     counts: &mut [u64; 4],
     shaded: &mut Shade8,
-) {
+    (tree, budget): (&mut [u32], u32),
+) -> Option<u32> {
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
         let mask = h.hit_mask();
@@ -235,10 +250,18 @@ fn shade_hits(
         let depth = depth.map(|d| d.saturating_sub(1));
         for (sec, kind) in [(&s.reflection, 2), (&s.refraction, 3)] {
             let b = simd::bitmask(sec.mask);
+            for i in (0..LANES).filter(|&i| b >> i & 1 == 1) {
+                let t = &mut tree[pixel[i] as usize];
+                if *t == budget {
+                    return Some(pixel[i]);
+                }
+                *t += 1;
+            }
             counts[kind] += b.count_ones() as u64;
             next.push_lanes(b, &sec.origin, &sec.dir, pixel, &w.scale(sec.weight), depth);
         }
     }
+    None
 }
 
 /// `accum[pixel[i]] += v[i]` for the lanes of `bits`.
