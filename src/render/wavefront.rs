@@ -26,7 +26,10 @@ use std::time::Instant;
 /// the BVH, and so do the shadow rays from their hits); adding the origin octant took another
 /// ~8% (shadow 1.02-1.10 -> 0.92-1.00, secondary 1.13-1.20 -> 1.02-1.12); octant x major
 /// axis (24 bins) measured the same as the octant alone. On `phong` and `cubemap` the
-/// difference is within the noise. On.
+/// difference is within the noise. On, from the second secondary generation: the first
+/// (reflection and refraction rays of camera-ray hits) comes out of camera packets in pixel
+/// order and is coherent already; binning it cost `phong` (depth 1) 5-10% for nothing, and
+/// skipping it leaves `refraction` where it was (2.61-2.64 s against 2.41-2.70 s).
 pub const BIN_SECONDARY: bool = true;
 
 /// Queues and buffers of one worker, reused from tile to tile (so a tile allocates nothing
@@ -120,7 +123,9 @@ pub fn render_tile(
         let start = Instant::now();
         std::mem::swap(rays, next);
         next.clear();
-        if BIN_SECONDARY {
+        // `rays` now holds what this generation's hits spawned; the secondaries of camera-ray
+        // hits (generation 0) stay in pixel order
+        if BIN_SECONDARY && generation >= 1 {
             rays.bin_by_direction_and_origin(binning);
         }
         phase_ns[3] += start.elapsed().as_nanos() as u64;
