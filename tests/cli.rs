@@ -123,7 +123,7 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
     std::fs::write(&bad, "[image]\nwidth = 4\nheight = 3\nbogus = 1\n").unwrap();
     let trap = tmp("trap.toml");
     std::fs::write(&trap, TRAP).unwrap();
-    let cases: Vec<(Vec<String>, &str)> = vec![
+    let mut cases: Vec<(Vec<String>, &str)> = vec![
         (
             vec!["render".into(), bad.display().to_string(), "-q".into()],
             "bad.toml:4",
@@ -143,30 +143,22 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
             ],
             "over the cap",
         ),
-        (
-            // inside a closed box whose walls both mirror and refract, 64 bounces: every
-            // sample's ray tree doubles per bounce (2^65 rays); refused within the budget
-            vec![
-                "render".into(),
-                trap.display().to_string(),
-                "-q".into(),
-                "-o".into(),
-                tmp("trap.png").display().to_string(),
-            ],
+    ];
+    // inside a closed box whose walls both mirror and refract, 64 bounces: every sample's ray
+    // tree doubles per bounce (2^65 rays); refused within the budget, by both engines
+    for engine in ["packet", "scalar"] {
+        let trap_args = [trap.display().to_string(), "-q".into(), "-o".into()];
+        let out = tmp("trap.png").display().to_string();
+        cases.push((
+            ["render".into()]
+                .into_iter()
+                .chain(trap_args)
+                .chain([out, "--engine".into(), engine.into()])
+                .collect(),
             "rays are trapped",
-        ),
-        (
-            vec![
-                "render".into(),
-                trap.display().to_string(),
-                "--engine".into(),
-                "scalar".into(),
-                "-q".into(),
-                "-o".into(),
-                tmp("trap.png").display().to_string(),
-            ],
-            "rays are trapped",
-        ),
+        ));
+    }
+    cases.extend([
         (
             vec![
                 "render".into(),
@@ -191,7 +183,7 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
             ],
             "32-byte",
         ),
-    ];
+    ]);
     for (args, want) in cases {
         let r = whitted()
             .args(&args)

@@ -27,10 +27,6 @@ impl LaneList {
         LaneList { idx, len }
     }
 
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -153,15 +149,6 @@ impl RayQueue {
         (packet, simd::mask_from_bits((1u32 << n) - 1))
     }
 
-    /// Make room for `n` entries without reallocating.
-    pub fn reserve(&mut self, n: usize) {
-        for v in self.o.iter_mut().chain(&mut self.d).chain(&mut self.weight) {
-            v.reserve(n);
-        }
-        self.pixel.reserve(n);
-        self.depth.reserve(n);
-    }
-
     /// Reorder entries so that rays with the same direction octant and the same origin octant
     /// (about the queue's mean origin) are adjacent: repacking for coherence. A stable
     /// counting sort over the 64 keys.
@@ -226,20 +213,6 @@ pub struct ShadowQueue {
 }
 
 impl ShadowQueue {
-    /// Make room for `n` entries without reallocating.
-    pub fn reserve(&mut self, n: usize) {
-        for v in self
-            .o
-            .iter_mut()
-            .chain(&mut self.d)
-            .chain(&mut self.contribution)
-        {
-            v.reserve(n);
-        }
-        self.tfar.reserve(n);
-        self.pixel.reserve(n);
-    }
-
     /// Append the lanes of `bits`, densely.
     #[inline]
     pub fn push_lanes(

@@ -157,27 +157,28 @@ fn generate_camera_rays(
     let (pw, ph) = shape.size();
     let weight = Vec3x8::splat([1.0 / offsets.len() as f32; 3]);
     let tw = x1 - x0;
-    let pixel_of = |bx: u32, by: u32| -> [u32; LANES] {
-        std::array::from_fn(|i| {
+    // Lanes inside the tile (so inside the image) and their tile-local pixels; lanes past
+    // the edge get the edge pixel and are left out of the queue.
+    let block = |bx: u32, by: u32| -> (u32, [u32; LANES]) {
+        let mut inside = 0;
+        let pixels = std::array::from_fn(|i| {
             let (dx, dy) = shape.offset(i);
-            let (x, y) = ((bx + dx).min(x1 - 1), (by + dy).min(y1 - 1));
-            (y - y0) * tw + (x - x0)
-        })
+            let (x, y) = (bx + dx, by + dy);
+            inside |= ((x < x1 && y < y1) as u32) << i;
+            (y.min(y1 - 1) - y0) * tw + (x.min(x1 - 1) - x0)
+        });
+        (inside, pixels)
     };
     for &(sx, sy) in offsets {
         for by in (y0..y1).step_by(ph as usize) {
             for bx in (x0..x1).step_by(pw as usize) {
-                let (packet, active) = camera_packet(camera, shape, bx, by, sx, sy);
-                // Lanes past the tile's edge (not only the image's) are left out.
-                let inside = (0..LANES).fold(0, |b, i| {
-                    let (dx, dy) = shape.offset(i);
-                    b | ((bx + dx < x1 && by + dy < y1) as u32) << i
-                });
+                let (packet, _) = camera_packet(camera, shape, bx, by, sx, sy);
+                let (inside, pixels) = block(bx, by);
                 out.push_lanes(
-                    simd::bitmask(active) & inside,
+                    inside,
                     &packet.o,
                     &packet.d,
-                    pixel_of(bx, by),
+                    pixels,
                     &weight,
                     [depth; LANES],
                 );
