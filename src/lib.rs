@@ -32,5 +32,6 @@ pub mod shade;
 pub mod simd;
 pub mod texture;
 pub mod trace;
+pub mod world;
 
 pub use error::{Error, Result};

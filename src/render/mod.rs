@@ -5,73 +5,15 @@ pub mod recursive;
 pub mod wavefront;
 
 pub use crate::trace::Engine;
+pub use crate::world::{Stage, Terms, World};
 
-use crate::accel::{Accel, BuildQuality};
 use crate::camera::sample_offsets;
 use crate::image::Image;
-use crate::scene::{Geometry, Scene};
+use crate::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
-
-/// The assignment's stages (SCENES.md §5); `None` renders the scene in full.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// White where a primary ray hits, background elsewhere; depth 0.
-    Intersection,
-    /// Ambient + diffuse, no shadows; depth 0.
-    Diffuse,
-    /// Ambient + diffuse + specular, no shadows; depth 0.
-    Specular,
-    /// Ambient + diffuse + specular with shadows; depth 0.
-    Shadow,
-    /// The full equation at the scene's depth.
-    Reflection,
-}
-
-impl Stage {
-    pub const ALL: [Stage; 5] = [
-        Stage::Intersection,
-        Stage::Diffuse,
-        Stage::Specular,
-        Stage::Shadow,
-        Stage::Reflection,
-    ];
-
-    pub fn name(self) -> &'static str {
-        [
-            "intersection",
-            "diffuse",
-            "specular",
-            "shadow",
-            "reflection",
-        ][self as usize]
-    }
-
-    pub fn from_name(s: &str) -> Option<Stage> {
-        Stage::ALL.into_iter().find(|st| st.name() == s)
-    }
-}
-
-/// Which terms of the equation are on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Terms {
-    pub white: bool,
-    pub specular: bool,
-    pub shadows: bool,
-}
-
-impl Terms {
-    pub fn of(stage: Option<Stage>) -> Terms {
-        use Stage::*;
-        Terms {
-            white: stage == Some(Intersection),
-            specular: !matches!(stage, Some(Intersection | Diffuse)),
-            shadows: !matches!(stage, Some(Intersection | Diffuse | Specular)),
-        }
-    }
-}
 
 /// Options of one render.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,32 +57,6 @@ impl Settings {
 /// at most 126, a glass sphere at depth 64 about 130). Past it, both engines stop and the
 /// render fails with [`RenderStats::over_budget`] set instead of running for days.
 pub const MAX_SAMPLE_SECONDARY_RAYS: u32 = 1 << 14;
-
-/// A scene ready to render: flattened geometry, its BVH, the offset `eps`.
-pub struct World {
-    pub scene: Scene,
-    pub geometry: Geometry,
-    pub accel: Accel,
-    /// `1e-5 L`, `L` the scene bounding-box diagonal (secondary-ray origin offset).
-    pub eps: f32,
-}
-
-impl World {
-    pub fn new(scene: Scene) -> World {
-        let geometry = scene.geometry();
-        let tris: Vec<[Vec3; 3]> = (0..geometry.triangles.len() as u32)
-            .map(|t| geometry.triangle(t))
-            .collect();
-        let accel = Accel::build(&tris, BuildQuality::default());
-        let eps = 1e-5 * geometry.diagonal();
-        World {
-            scene,
-            geometry,
-            accel,
-            eps,
-        }
-    }
-}
 
 /// Rays traced, by kind.
 #[derive(Debug, Default)]

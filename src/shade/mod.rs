@@ -8,8 +8,8 @@ pub use packet::{Shade8, shade8};
 
 use crate::accel::occluded1;
 use crate::ray::{Hit, Ray, offset_origin, reflect, refract};
-use crate::render::{Terms, World};
 use crate::scene::{Albedo, Geometry, Material};
+use crate::world::{Terms, World};
 use glam::Vec3;
 
 /// Everything shading needs at a hit point.

@@ -11,8 +11,8 @@
 
 use super::{albedo, phong_pow, powi_by_squaring, triangle_material, whole_exponent};
 use crate::packet::{HitPacket8, RayPacket8};
-use crate::render::{Terms, World};
 use crate::simd::{self, F32x8, LANES, M32x8, Vec3x8};
+use crate::world::{Terms, World};
 
 /// One light's share of a hit packet: the shadow rays and what they carry.
 #[derive(Clone, Copy, Debug, Default)]
