@@ -53,8 +53,9 @@ struct TraceArgs {
     /// Output hits: `u32 triangle, f32 t, f32 b1, f32 b2`, 16 bytes each.
     #[arg(long)]
     hits: PathBuf,
-    /// packet (intersect8, default) or scalar (intersect1).
-    #[arg(long, default_value = "packet")]
+    /// auto (= packet), packet (intersect8), wide (intersect_wide1, the 8-wide tree) or scalar
+    /// (intersect1); all write the same bytes.
+    #[arg(long, default_value = "auto")]
     engine: String,
     /// Skip back faces.
     #[arg(long)]
@@ -95,8 +96,9 @@ struct RenderArgs {
     /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
-    /// packet (wavefront renderer on 8-wide packets, default) or scalar (the reference).
-    #[arg(long, default_value = "packet")]
+    /// auto (wavefront renderer, fastest kernel per queue, default), packet or wide (wavefront,
+    /// that kernel for every queue) or scalar (the recursive reference).
+    #[arg(long, default_value = "auto")]
     engine: String,
     /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
     #[arg(long)]
@@ -114,13 +116,11 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 }
 
 fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
-    match name {
-        "packet" => Ok(whitted::trace::Engine::Packet),
-        "scalar" => Ok(whitted::trace::Engine::Scalar),
-        e => Err(Error::Usage(format!(
-            "unknown engine '{e}' (packet, scalar)"
-        ))),
-    }
+    whitted::trace::Engine::from_name(name).ok_or_else(|| {
+        Error::Usage(format!(
+            "unknown engine '{name}' (auto, packet, wide, scalar)"
+        ))
+    })
 }
 
 fn check_subdivide(k: u32) -> Result<()> {
@@ -359,7 +359,7 @@ fn print_stats(
     println!(
         "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
     );
-    if engine == whitted::trace::Engine::Packet {
+    if engine != whitted::trace::Engine::Scalar {
         let rays_of = [primary, primary + refl + refr, shadow, refl + refr];
         for (k, name) in whitted::render::RenderStats::PHASES.iter().enumerate() {
             let secs = load(&stats.phase_ns[k]) as f64 * 1e-9;
@@ -374,7 +374,7 @@ fn print_stats(
             );
         }
     } else {
-        println!("phases            (only the packet engine times its phases)");
+        println!("phases            (only the wavefront engines time their phases)");
     }
     let secs = stats.time.as_secs_f64();
     println!(

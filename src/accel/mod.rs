@@ -3,10 +3,14 @@
 pub mod packet;
 pub mod scalar;
 pub mod tri_soa;
+pub mod wide;
+pub mod wide1;
 
 pub use packet::{intersect8, occluded8};
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
+pub use wide::Bvh8;
+pub use wide1::{intersect_wide1, intersect_wide8, occluded_wide1, occluded_wide8};
 
 use glam::Vec3;
 use obvhs::aabb::Aabb;
@@ -40,6 +44,8 @@ pub struct Accel {
     pub tris: TriangleSoa,
     /// Deepest root-to-leaf path (sizes traversal stacks).
     pub depth: usize,
+    /// The same tree collapsed to 8-wide nodes with SoA triangle blocks (`wide.rs`).
+    pub wide: Bvh8,
     pub build_time: Duration,
 }
 
@@ -88,12 +94,16 @@ impl Accel {
             .collect();
         let tris = TriangleSoa::new(tris, &bvh.primitive_indices);
         let depth = tree_depth(&nodes);
-        Accel {
+        let mut accel = Accel {
             nodes,
             tris,
             depth,
-            build_time: start.elapsed(),
-        }
+            wide: Bvh8::default(),
+            build_time: Duration::ZERO,
+        };
+        accel.wide = Bvh8::collapse(&accel);
+        accel.build_time = start.elapsed();
+        accel
     }
 }
 

@@ -23,7 +23,8 @@ pub struct Settings {
     pub depth: Option<u32>,
     /// Samples per pixel (stratified, deterministic).
     pub spp: u32,
-    /// Wavefront on packets (default) or the scalar recursive reference.
+    /// The wavefront renderer with the fastest kernel per queue (`Auto`, default), with one
+    /// kernel for every queue (`Packet`, `Wide`), or the scalar recursive reference.
     pub engine: Engine,
 }
 
@@ -33,7 +34,7 @@ impl Default for Settings {
             stage: None,
             depth: None,
             spp: 1,
-            engine: Engine::Packet,
+            engine: Engine::Auto,
         }
     }
 }
@@ -158,7 +159,7 @@ pub fn render(
                 }
                 let scalar;
                 let pixels: &[Vec3] = match settings.engine {
-                    Engine::Packet => {
+                    Engine::Auto | Engine::Packet | Engine::Wide => {
                         wavefront::render_tile(world, settings, &offsets, x0, y0, &stats, ws);
                         &ws.accum
                     }
