@@ -53,8 +53,8 @@ struct TraceArgs {
     /// Output hits: `u32 triangle, f32 t, f32 b1, f32 b2`, 16 bytes each.
     #[arg(long)]
     hits: PathBuf,
-    /// auto (= packet), packet (intersect8), wide (intersect_wide1, the 8-wide tree) or scalar
-    /// (intersect1); all write the same bytes.
+    /// auto (= packet), packet (intersect8), wide (intersect_wide1, the 8-wide tree), hybrid
+    /// (intersect_hybrid8) or scalar (intersect1); all write the same bytes.
     #[arg(long, default_value = "auto")]
     engine: String,
     /// Skip back faces.
@@ -96,8 +96,8 @@ struct RenderArgs {
     /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
-    /// auto (wavefront renderer, fastest kernel per queue, default), packet or wide (wavefront,
-    /// that kernel for every queue) or scalar (the recursive reference).
+    /// auto (wavefront renderer, fastest kernel per queue, default), packet, wide or hybrid
+    /// (wavefront, that kernel for every queue) or scalar (the recursive reference).
     #[arg(long, default_value = "auto")]
     engine: String,
     /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
@@ -118,7 +118,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
     whitted::trace::Engine::from_name(name).ok_or_else(|| {
         Error::Usage(format!(
-            "unknown engine '{name}' (auto, packet, wide, scalar)"
+            "unknown engine '{name}' (auto, packet, wide, hybrid, scalar)"
         ))
     })
 }

@@ -1,6 +1,6 @@
 //! Tracing bare ray batches (no shading) with either engine: `whitted trace-rays`, benches.
 
-use crate::accel::{Accel, intersect_wide1, intersect1, intersect8};
+use crate::accel::{Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8};
 use crate::packet::RayPacket8;
 use crate::ray::{Hit, Ray};
 use rayon::prelude::*;
@@ -16,13 +16,22 @@ pub enum Engine {
     Packet,
     /// `intersect_wide1` ray by ray over the 8-wide tree.
     Wide,
+    /// `intersect_hybrid8`: packets of 8 over the binary tree that hand their last few
+    /// lanes to single-ray traversal of the 8-wide tree.
+    Hybrid,
     /// `intersect1` ray by ray over the binary tree (the reference).
     Scalar,
 }
 
 impl Engine {
     /// Every engine, by name.
-    pub const ALL: [Engine; 4] = [Engine::Auto, Engine::Packet, Engine::Wide, Engine::Scalar];
+    pub const ALL: [Engine; 5] = [
+        Engine::Auto,
+        Engine::Packet,
+        Engine::Wide,
+        Engine::Hybrid,
+        Engine::Scalar,
+    ];
 
     /// The engine's name on the command line.
     pub fn name(self) -> &'static str {
@@ -30,6 +39,7 @@ impl Engine {
             Engine::Auto => "auto",
             Engine::Packet => "packet",
             Engine::Wide => "wide",
+            Engine::Hybrid => "hybrid",
             Engine::Scalar => "scalar",
         }
     }
@@ -53,10 +63,15 @@ pub fn trace_rays(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool) -> Ve
                 Engine::Wide => {
                     out.extend(chunk.iter().map(|r| intersect_wide1(accel, r, cull)));
                 }
-                Engine::Auto | Engine::Packet => {
+                Engine::Auto | Engine::Packet | Engine::Hybrid => {
+                    let f = if engine == Engine::Hybrid {
+                        intersect_hybrid8
+                    } else {
+                        intersect8
+                    };
                     for group in chunk.chunks(8) {
                         let (packet, active) = RayPacket8::from_fn(|i| group.get(i).copied());
-                        let hits = intersect8(accel, &packet, active, cull);
+                        let hits = f(accel, &packet, active, cull);
                         out.extend((0..group.len()).map(|i| hits.lane(i)));
                     }
                 }

@@ -1,4 +1,5 @@
-//! Every engine (packet8 on the binary tree, wide1 and wide8 on the 8-wide tree) held to the
+//! Every engine (packet8 on the binary tree, wide1 and wide8 on the 8-wide tree, hybrid8 on
+//! both) held to the
 //! scalar reference bit for bit, the scalar kernel held to the literal
 //! f64 formula of SCENES.md §2, and the BVH held to brute force.
 //!
@@ -14,8 +15,8 @@ use glam::Vec3;
 use proptest::prelude::*;
 use whitted::accel::scalar::{intersect_brute1, literal_hit};
 use whitted::accel::{
-    Accel, BuildQuality, intersect_wide1, intersect_wide8, intersect1, intersect8, occluded_wide1,
-    occluded_wide8, occluded1, occluded8,
+    Accel, BuildQuality, intersect_hybrid8, intersect_wide1, intersect_wide8, intersect1,
+    intersect8, occluded_hybrid8, occluded_wide1, occluded_wide8, occluded1, occluded8,
 };
 use whitted::io::load_mesh;
 use whitted::packet::RayPacket8;
@@ -130,6 +131,8 @@ fn check_packets(
         let occ = occluded8(accel, &packet, active, cull);
         let whits = intersect_wide8(accel, &packet, active, cull);
         let wocc = occluded_wide8(accel, &packet, active, cull);
+        let hhits = intersect_hybrid8(accel, &packet, active, cull);
+        let hocc = occluded_hybrid8(accel, &packet, active, cull);
         for i in 0..8 {
             let lane_active = simd::lane_set(active, i);
             if !lane_active {
@@ -138,6 +141,8 @@ fn check_packets(
                 prop_assert!(!simd::lane_set(occ, i));
                 prop_assert_eq!(whits.lane(i), None);
                 prop_assert!(!simd::lane_set(wocc, i));
+                prop_assert_eq!(hhits.lane(i), None);
+                prop_assert!(!simd::lane_set(hocc, i));
                 continue;
             }
             let ray = chunk[i];
@@ -162,6 +167,13 @@ fn check_packets(
             prop_assert_eq!(bits_of(whits.lane(i)), bits_of(scalar), "wide8 lane {}", i);
             prop_assert_eq!(occluded_wide1(accel, &ray, cull), scalar.is_some());
             prop_assert_eq!(simd::lane_set(wocc, i), scalar.is_some());
+            prop_assert_eq!(
+                bits_of(hhits.lane(i)),
+                bits_of(scalar),
+                "hybrid8 lane {}",
+                i
+            );
+            prop_assert_eq!(simd::lane_set(hocc, i), scalar.is_some());
             // BVH traversal equals brute force.
             prop_assert_eq!(
                 bits_of(scalar),
@@ -277,6 +289,7 @@ fn leaks(tris: &[[Vec3; 3]], origins: &[Vec3], targets: &[Vec3]) -> (usize, usiz
         let (packet, active) = RayPacket8::from_fn(|i| chunk.get(i).copied());
         let hits = intersect8(&accel, &packet, active, false);
         let whits = intersect_wide8(&accel, &packet, active, false);
+        let hhits = intersect_hybrid8(&accel, &packet, active, false);
         for i in 0..chunk.len() {
             let scalar = intersect1(&accel, &chunk[i], false);
             let wide = intersect_wide1(&accel, &chunk[i], false);
@@ -284,6 +297,7 @@ fn leaks(tris: &[[Vec3; 3]], origins: &[Vec3], targets: &[Vec3]) -> (usize, usiz
                 || scalar.is_none()
                 || wide.is_none()
                 || whits.lane(i).is_none()
+                || hhits.lane(i).is_none()
             {
                 let brute = whitted::accel::scalar::intersect_brute1(&accel, &chunk[i], false);
                 eprintln!("leak: {:?} brute {:?}", chunk[i], brute);

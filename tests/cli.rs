@@ -34,7 +34,7 @@ fn renders_the_demo_without_any_files() {
 
 #[test]
 fn both_engines_and_exr_output() {
-    for engine in ["packet", "scalar"] {
+    for engine in ["auto", "packet", "wide", "hybrid", "scalar"] {
         let out = tmp(&format!("demo-{engine}.exr"));
         let r = whitted()
             .args([
@@ -90,7 +90,7 @@ fn trace_rays_writes_one_record_per_ray_and_engines_agree() {
     let input = tmp("rays.bin");
     std::fs::write(&input, whitted::io::rays::encode_rays(&rays)).unwrap();
     let mut outputs = Vec::new();
-    for engine in ["packet", "scalar"] {
+    for engine in ["auto", "packet", "wide", "hybrid", "scalar"] {
         let hits = tmp(&format!("hits-{engine}.bin"));
         let r = whitted()
             .arg("trace-rays")
@@ -111,10 +111,12 @@ fn trace_rays_writes_one_record_per_ray_and_engines_agree() {
         assert!(parsed.iter().flatten().all(|h| h.tri < 12));
         outputs.push(bytes);
     }
-    assert_eq!(
-        outputs[0], outputs[1],
-        "packet and scalar hit files are identical"
-    );
+    for (k, o) in outputs.iter().enumerate() {
+        assert_eq!(
+            o, &outputs[4],
+            "engine {k}'s hit file equals the scalar reference's"
+        );
+    }
 }
 
 #[test]
@@ -146,7 +148,7 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
     ];
     // inside a closed box whose walls both mirror and refract, 64 bounces: every sample's ray
     // tree doubles per bounce (2^65 rays); refused within the budget, by both engines
-    for engine in ["packet", "scalar"] {
+    for engine in ["auto", "packet", "wide", "hybrid", "scalar"] {
         let trap_args = [trap.display().to_string(), "-q".into(), "-o".into()];
         let out = tmp("trap.png").display().to_string();
         cases.push((

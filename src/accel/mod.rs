@@ -1,11 +1,13 @@
 //! Acceleration: an obvhs BVH2 flattened into compact nodes, and the triangles in BVH order.
 
+pub mod hybrid8;
 pub mod packet;
 pub mod scalar;
 pub mod tri_soa;
 pub mod wide;
 pub mod wide1;
 
+pub use hybrid8::{intersect_hybrid8, occluded_hybrid8};
 pub use packet::{intersect8, occluded8};
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
@@ -46,7 +48,9 @@ pub struct Accel {
     pub depth: usize,
     /// The same tree collapsed to 8-wide nodes with SoA triangle blocks (`wide.rs`).
     pub wide: Bvh8,
+    /// The whole build, and of that the 8-wide collapse.
     pub build_time: Duration,
+    pub collapse_time: Duration,
 }
 
 impl Accel {
@@ -100,8 +104,11 @@ impl Accel {
             depth,
             wide: Bvh8::default(),
             build_time: Duration::ZERO,
+            collapse_time: Duration::ZERO,
         };
+        let collapse = Instant::now();
         accel.wide = Bvh8::collapse(&accel);
+        accel.collapse_time = collapse.elapsed();
         accel.build_time = start.elapsed();
         accel
     }

@@ -73,7 +73,14 @@ pub struct Bvh8 {
     pub blocks: Vec<TriBlock8>,
     /// Deepest root-to-leaf path in nodes (sizes traversal stacks).
     pub depth: usize,
+    /// Per binary node, the wide reference of the same subtree ([`NO_ENTRY`] for binary
+    /// nodes that were opened into a wide node's children): where a hybrid packet hands its
+    /// remaining lanes to single-ray traversal.
+    pub entry: Vec<u32>,
 }
+
+/// `Bvh8::entry` of a binary node without a wide twin.
+pub const NO_ENTRY: u32 = LEAF_BIT - 1;
 
 impl Bvh8 {
     /// Collapse `accel`'s binary tree (see the module header).
@@ -83,6 +90,7 @@ impl Bvh8 {
             return out;
         }
         let counts = subtree_counts(&accel.nodes);
+        out.entry = vec![NO_ENTRY; accel.nodes.len()];
         out.nodes.reserve(accel.nodes.len() / 4 + 1);
         out.blocks.reserve(accel.tris.len() / 4 + 1);
         let root = &accel.nodes[0];
@@ -93,6 +101,7 @@ impl Bvh8 {
             out.nodes[0].set_child(0, root, leaf);
             out.nodes[0].set_order(1);
             out.depth = 1;
+            out.entry[0] = 0;
         } else {
             out.depth = out.node(accel, &counts, 0, 1);
         }
@@ -109,6 +118,7 @@ impl Bvh8 {
     fn node(&mut self, accel: &Accel, counts: &[u32], b: usize, depth: usize) -> usize {
         let me = self.nodes.len();
         self.nodes.push(Node8::default());
+        self.entry[b] = me as u32;
         // open the largest-area child until 8 children or only leaves remain.
         let mut kids: Vec<usize> = Vec::with_capacity(BLOCK);
         let first = accel.nodes[b].first as usize;
@@ -149,11 +159,13 @@ impl Bvh8 {
             self.blocks.push(TriBlock8::new(accel, chunk));
         }
         let n = self.blocks.len() - first;
+        let r = LEAF_BIT | ((n as u32).saturating_sub(1) << LEAF_BLOCKS_SHIFT) | first as u32;
+        self.entry[b] = r;
         assert!(
             (1..=8).contains(&n) && first <= LEAF_FIRST_MASK as usize,
             "leaf of {n} blocks at {first}: the BVH2 leaf size or scene cap changed"
         );
-        LEAF_BIT | ((n as u32 - 1) << LEAF_BLOCKS_SHIFT) | first as u32
+        r
     }
 }
 

@@ -134,7 +134,7 @@ pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f3
 thread_local! {
     /// Traversal stack of this thread, grown to the deepest tree seen (so a ray allocates
     /// nothing and clears nothing).
-    static STACK: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
+    pub(super) static STACK: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
@@ -150,14 +150,18 @@ fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> 
         if stack.len() < need {
             stack.resize(need, (0, 0.0));
         }
-        walk::<ANY_HIT>(accel, bvh, &RayWide::new(ray), ray.tfar, cull, stack)
+        walk::<ANY_HIT>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack)
     })
 }
 
+/// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
+/// nearest hit with `tnear < t < tfar`, or with `ANY_HIT` the first. `stack` holds at least
+/// `7 depth + 8` entries.
 #[inline(always)]
-fn walk<const ANY_HIT: bool>(
+pub(super) fn walk<const ANY_HIT: bool>(
     accel: &Accel,
     bvh: &Bvh8,
+    start: u32,
     r: &RayWide,
     mut tfar: f32,
     cull: bool,
@@ -165,7 +169,7 @@ fn walk<const ANY_HIT: bool>(
 ) -> Option<Hit> {
     let mut best: Option<Hit> = None;
     let mut sp = 0usize;
-    let mut cur = 0u32;
+    let mut cur = start;
     loop {
         if cur & LEAF_BIT == 0 {
             let node = &bvh.nodes[cur as usize];
@@ -275,7 +279,7 @@ pub fn occluded_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: boo
 }
 
 /// A packet's lanes as plain arrays (one conversion for all lanes).
-struct Lanes {
+pub(super) struct Lanes {
     o: [[f32; 8]; 3],
     d: [[f32; 8]; 3],
     tnear: [f32; 8],
@@ -284,7 +288,7 @@ struct Lanes {
 
 impl Lanes {
     #[inline(always)]
-    fn of(p: &RayPacket8) -> Lanes {
+    pub(super) fn of(p: &RayPacket8) -> Lanes {
         Lanes {
             o: p.o.to_lanes(),
             d: p.d.to_lanes(),
@@ -293,7 +297,7 @@ impl Lanes {
         }
     }
     #[inline(always)]
-    fn ray(&self, i: usize) -> Ray {
+    pub(super) fn ray(&self, i: usize) -> Ray {
         Ray::new(
             glam::Vec3::new(self.o[0][i], self.o[1][i], self.o[2][i]),
             glam::Vec3::new(self.d[0][i], self.d[1][i], self.d[2][i]),

@@ -2,7 +2,8 @@
 
 use super::*;
 use crate::accel::{
-    Accel, intersect_wide1, intersect1, intersect8, occluded_wide1, occluded1, occluded8,
+    Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8, occluded_hybrid8,
+    occluded_wide1, occluded1, occluded8,
 };
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
@@ -89,11 +90,14 @@ pub enum Engine {
     Packet,
     /// `intersect_wide1` / `occluded_wide1` on the 8-wide tree, ray by ray.
     Wide,
+    /// `intersect_hybrid8` / `occluded_hybrid8`: packets on the binary tree, single rays on
+    /// the wide tree once few lanes remain.
+    Hybrid,
 }
 
 impl Engine {
     /// Every engine, in report order.
-    pub const ALL: [Engine; 3] = [Engine::Scalar, Engine::Packet, Engine::Wide];
+    pub const ALL: [Engine; 4] = [Engine::Scalar, Engine::Packet, Engine::Wide, Engine::Hybrid];
 
     /// The engine's key in tables and JSON.
     pub fn name(self) -> &'static str {
@@ -101,13 +105,14 @@ impl Engine {
             Engine::Scalar => "scalar",
             Engine::Packet => "packet8",
             Engine::Wide => "wide1",
+            Engine::Hybrid => "hybrid8",
         }
     }
 
     /// Packet engines are compared with Embree's 8- and 16-wide packets, single-ray ones
     /// with its single rays.
     pub fn packet(self) -> bool {
-        matches!(self, Engine::Packet)
+        matches!(self, Engine::Packet | Engine::Hybrid)
     }
 }
 
@@ -194,6 +199,8 @@ impl Out {
             (Engine::Packet, true) => Out::Occ8(occ8, occluded8),
             (Engine::Wide, false) => Out::Hits(hits, intersect_wide1),
             (Engine::Wide, true) => Out::Occ(occ, occluded_wide1),
+            (Engine::Hybrid, false) => Out::Hits8(hits8, intersect_hybrid8),
+            (Engine::Hybrid, true) => Out::Occ8(occ8, occluded_hybrid8),
         }
     }
 

@@ -123,6 +123,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
         height: work.height,
         build,
         wide_bytes: accel.wide.bytes(),
+        collapse_ms: accel.collapse_time.as_secs_f64() * 1e3,
         measured,
         peer,
     })

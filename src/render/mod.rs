@@ -159,7 +159,7 @@ pub fn render(
                 }
                 let scalar;
                 let pixels: &[Vec3] = match settings.engine {
-                    Engine::Auto | Engine::Packet | Engine::Wide => {
+                    Engine::Auto | Engine::Packet | Engine::Wide | Engine::Hybrid => {
                         wavefront::render_tile(world, settings, &offsets, x0, y0, &stats, ws);
                         &ws.accum
                     }

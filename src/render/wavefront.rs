@@ -9,7 +9,10 @@
 
 use super::queues::{BinScratch, RayQueue, ShadowQueue};
 use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
-use crate::accel::{Accel, intersect_wide8, intersect8, occluded_wide8, occluded8};
+use crate::accel::{
+    Accel, intersect_hybrid8, intersect_wide8, intersect8, occluded_hybrid8, occluded_wide8,
+    occluded8,
+};
 use crate::camera::Camera;
 use crate::packet::RayPacket8;
 use crate::packet::{HitPacket8, PacketShape, camera_packet};
@@ -42,6 +45,8 @@ pub enum Kernel {
     Packet,
     /// `intersect_wide1` / `occluded_wide1` lane by lane down the 8-wide tree.
     Wide,
+    /// `intersect_hybrid8` / `occluded_hybrid8`: together while the lanes agree, then alone.
+    Hybrid,
 }
 
 impl Kernel {
@@ -50,6 +55,7 @@ impl Kernel {
         match self {
             Kernel::Packet => intersect8(accel, p, active, cull),
             Kernel::Wide => intersect_wide8(accel, p, active, cull),
+            Kernel::Hybrid => intersect_hybrid8(accel, p, active, cull),
         }
     }
     #[inline]
@@ -57,6 +63,7 @@ impl Kernel {
         match self {
             Kernel::Packet => occluded8(accel, p, active, cull),
             Kernel::Wide => occluded_wide8(accel, p, active, cull),
+            Kernel::Hybrid => occluded_hybrid8(accel, p, active, cull),
         }
     }
 }
@@ -73,12 +80,13 @@ pub struct Kernels {
 }
 
 /// `--engine auto`: the fastest kernel per queue, measured (README, "Engines"): camera rays
-/// are coherent and stay in packets; shadow, reflection and refraction rays go lane by lane
-/// down the 8-wide tree.
+/// are coherent and stay in packets; shadow, reflection and refraction rays are coherent in
+/// some scenes (phong's floor) and scattered in others (after refraction), so they go hybrid,
+/// which keeps packets while their lanes agree.
 pub const AUTO: Kernels = Kernels {
     camera: Kernel::Packet,
-    shadow: Kernel::Wide,
-    secondary: Kernel::Wide,
+    shadow: Kernel::Hybrid,
+    secondary: Kernel::Hybrid,
 };
 
 impl Kernels {
@@ -92,6 +100,7 @@ impl Kernels {
         match engine {
             Engine::Auto => AUTO,
             Engine::Wide => all(Kernel::Wide),
+            Engine::Hybrid => all(Kernel::Hybrid),
             Engine::Packet | Engine::Scalar => all(Kernel::Packet),
         }
     }
