@@ -266,3 +266,61 @@ fn collect_slots(nodes: &[Node], b: usize, out: &mut Vec<u32>) {
         collect_slots(nodes, n.first as usize + 1, out);
     }
 }
+
+/// The wide tree taken from obvhs's compressed wide BVH instead of our collapse: its child
+/// boxes dequantized (and padded as `Accel::build` pads, so they stay conservative) and its
+/// leaves (at most 3 triangles each, obvhs's cap for CWBVH) as blocks. Kept to measure the two
+/// ways of building the tree against each other (`tests/measure.rs`, README "Engines");
+/// `entry` is left empty, so hybrid packets never switch on it.
+pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
+    let mut slot_of = vec![0u32; accel.tris.len()];
+    for (slot, &p) in accel.tris.prim.iter().enumerate() {
+        slot_of[p as usize] = slot as u32;
+    }
+    let mut out = Bvh8 {
+        nodes: vec![Node8::default(); cw.nodes.len()],
+        ..Bvh8::default()
+    };
+    for (i, n) in cw.nodes.iter().enumerate() {
+        let mut k = 0;
+        for c in 0..BLOCK {
+            if n.is_child_empty(c) {
+                continue;
+            }
+            let b = n.child_aabb(c);
+            let (lo, hi) = (glam::Vec3::from(b.min), glam::Vec3::from(b.max));
+            let pad = super::BOX_PAD * lo.abs().max(hi.abs()).max_element() + f32::MIN_POSITIVE;
+            let bx = Node {
+                min: (lo - pad).into(),
+                max: (hi + pad).into(),
+                count: 0,
+                first: 0,
+            };
+            let r = if n.is_leaf(c) {
+                let (start, count) = n.child_primitives(c);
+                let slots: Vec<u32> = (start..start + count)
+                    .map(|j| slot_of[cw.primitive_indices[j as usize] as usize])
+                    .collect();
+                out.blocks.push(TriBlock8::new(accel, &slots));
+                LEAF_BIT | (out.blocks.len() - 1) as u32
+            } else {
+                n.child_node_index(c)
+            };
+            out.nodes[i].set_child(k, &bx, r);
+            k += 1;
+        }
+        out.nodes[i].set_order(k);
+    }
+    // depth, for stack sizing
+    let mut stack = vec![(0u32, 1usize)];
+    while let Some((i, d)) = stack.pop() {
+        out.depth = out.depth.max(d);
+        let n = &out.nodes[i as usize];
+        for c in 0..BLOCK {
+            if n.valid() >> c & 1 == 1 && n.child[c] & LEAF_BIT == 0 {
+                stack.push((n.child[c], d + 1));
+            }
+        }
+    }
+    out
+}

@@ -30,6 +30,7 @@ pub use report::*;
 pub use timing::*;
 pub use workloads::*;
 
+use crate::accel::BuildQuality;
 use std::path::{Path, PathBuf};
 
 // ---------------------------------------------------------------- `whitted bench`
@@ -64,6 +65,10 @@ pub struct Options {
     /// Do not run the peer even when it is found.
     #[cfg_attr(feature = "cli", arg(long))]
     pub no_peer: bool,
+    /// whitted's BVH build preset: fast, medium or slow (default: the renderer's). The peer
+    /// always builds at Embree's MEDIUM.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub quality: Option<String>,
 }
 
 pub const MAX_SUBDIVIDE: u32 = 6;
@@ -98,7 +103,18 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     let tris = triangles(&mesh);
     let threads = opts.threads.max(1);
     let reps = opts.reps.clamp(1, 64);
-    let (accel, build) = time_build(&tris, reps);
+    let quality = match opts.quality.as_deref() {
+        None => BuildQuality::default(),
+        Some("fast") => BuildQuality::Fast,
+        Some("medium") => BuildQuality::Medium,
+        Some("slow") => BuildQuality::Slow,
+        Some(q) => {
+            return Err(crate::Error::Usage(format!(
+                "--quality {q}: expected fast, medium or slow"
+            )));
+        }
+    };
+    let (accel, build) = time_build(&tris, reps, quality);
     let work = Workloads::generate(&mesh, &accel, width, height);
     let measured = measure(&accel, &work, threads, reps);
     let peer = if opts.no_peer {

@@ -118,10 +118,10 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
 
 /// BVH build time over `tris` (whitted's default quality), best and median of `reps` builds
 /// after a warm-up. obvhs builds on one thread.
-pub fn time_build(tris: &[[Vec3; 3]], reps: usize) -> (Accel, Timing) {
+pub fn time_build(tris: &[[Vec3; 3]], reps: usize, quality: BuildQuality) -> (Accel, Timing) {
     let mut accel = Accel::default();
     let t = time_reps(reps, 1, || {
-        accel = Accel::build(tris, BuildQuality::default());
+        accel = Accel::build(tris, quality);
     });
     (accel, t)
 }
