@@ -187,7 +187,7 @@ mod tests {
             .unwrap();
         assert_eq!((c.x0, c.y1), (51, 3));
         assert!(
-            Part::parse_crop("0.3,0.30001,0,1")
+            Part::parse_crop("0.31,0.32,0,1")
                 .unwrap()
                 .bounds(10, 10)
                 .is_err()
