@@ -149,7 +149,7 @@ mod tests {
             for i in 0..n {
                 let b = Part::Tile { index: i, count: n }.bounds(1024, h).unwrap();
                 assert_eq!((b.x0, b.x1, b.y0), (0, 1024, next), "{h} {i}/{n}");
-                assert!(b.y0 % TILE == 0 && !b.is_empty());
+                assert!(b.y0.is_multiple_of(TILE) && !b.is_empty());
                 next = b.y1;
             }
             assert_eq!(next, h);
