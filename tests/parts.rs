@@ -620,3 +620,86 @@ n = 20
 material = "glassmirror"
 shape = "cube"
 "#;
+
+/// `--subdivide` is checked against the scene's triangle cap before any mesh is subdivided:
+/// level 6 of the kitten (84M triangles) is refused at once.
+#[test]
+fn subdivision_past_the_triangle_cap_is_refused_before_subdividing() {
+    let out = tmp("sub6.png");
+    let e = fails(&[
+        "render",
+        "phong",
+        "--subdivide",
+        "6",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("--subdivide 6 would make 83722240 triangles from 20440"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+/// The peak memory of `/usr/bin/time -v` (maximum resident set) of a whitted command, in MB.
+fn peak_mb(args: &[&str]) -> f64 {
+    let r = Command::new("/usr/bin/time")
+        .arg("-v")
+        .arg(env!("CARGO_BIN_EXE_whitted"))
+        .args(args)
+        .env("WHITTED_ASSETS", common::assets())
+        .output()
+        .expect("/usr/bin/time (Debian package `time`)");
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{args:?}: {stderr}");
+    let kb: f64 = stderr
+        .lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix("Maximum resident set size (kbytes): ")
+        })
+        .expect("maximum resident set size")
+        .parse()
+        .unwrap();
+    kb / 1e3
+}
+
+/// Streaming output: a 16384x8192 `phong` EXR peaks under 600 MB (its f32 frame buffer alone
+/// would be 1.6 GB); about 2 minutes on 2 cores:
+/// `cargo test --release --test parts -- --ignored --nocapture sixteen_k`.
+#[test]
+#[ignore]
+fn sixteen_k_phong_exr_peaks_under_600_mb() {
+    let out = tmp("phong-16k.exr");
+    let o = out.to_str().unwrap();
+    let mb = peak_mb(&[
+        "render", "phong", "--width", "16384", "--height", "8192", "-q", "-o", o,
+    ]);
+    println!("16384x8192 phong EXR: peak {mb:.0} MB");
+    assert!(mb < 600.0, "peak {mb:.0} MB");
+    let _ = std::fs::remove_file(&out);
+}
+
+/// 5.2M triangles render: `phong --subdivide 4` (about 2 GB and 10-20 s):
+/// `cargo test --release --test parts -- --ignored --nocapture subdivide_4`.
+#[test]
+#[ignore]
+fn subdivide_4_renders_five_million_triangles() {
+    let out = tmp("phong-sub4.png");
+    let r = whitted()
+        .args([
+            "render",
+            "phong",
+            "--subdivide",
+            "4",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{stderr}");
+    assert!(stderr.contains("5232640 triangles"), "{stderr}");
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (1024, 768));
+}
