@@ -242,6 +242,7 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
     for w in warnings {
         eprintln!("warning: {w}");
     }
+    check_subdivided_triangles(args.subdivide, mesh.triangles.len() as u64)?;
     let mesh = mesh.subdivide(args.subdivide);
     let tris: Vec<[glam::Vec3; 3]> = mesh
         .triangles
@@ -329,6 +330,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     if let Some(h) = args.height {
         file.image.height = h;
     }
+    let (w, h) = check_size(file.image.width, file.image.height).map_err(Error::Usage)?;
     let stage = match &args.stage {
         None => None,
         Some(s) => Some(Stage::from_name(s).ok_or_else(|| {
@@ -366,7 +368,6 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let engine = parse_engine(&args.engine)?;
     set_threads(args.threads)?;
 
-    let (w, h) = check_size(file.image.width, file.image.height).map_err(Error::Usage)?;
     let part_arg = args.part()?;
     let part = part_arg.bounds(w, h).map_err(Error::Usage)?;
     let exr = parse_exr_options(args.half, &args.exr_compression)?;
