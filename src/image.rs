@@ -38,9 +38,13 @@ impl Image {
 /// select, and an EXR file's data window inside its display window.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PixelBounds {
+    /// First column.
     pub x0: u32,
+    /// One past the last column.
     pub x1: u32,
+    /// First row (row 0 is the top).
     pub y0: u32,
+    /// One past the last row.
     pub y1: u32,
 }
 
@@ -55,10 +59,12 @@ impl PixelBounds {
         }
     }
 
+    /// Columns inside (0 when empty).
     pub fn width(&self) -> u32 {
         self.x1.saturating_sub(self.x0)
     }
 
+    /// Rows inside (0 when empty).
     pub fn height(&self) -> u32 {
         self.y1.saturating_sub(self.y0)
     }
@@ -68,6 +74,7 @@ impl PixelBounds {
         self.width() as u64 * self.height() as u64
     }
 
+    /// Whether no pixel is inside.
     pub fn is_empty(&self) -> bool {
         self.area() == 0
     }

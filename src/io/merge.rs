@@ -19,8 +19,11 @@ const BATCH_BYTES: usize = 16 << 20;
 /// (the part), both as pixel bounds with exclusive ends.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PartHeader {
+    /// The file.
     pub path: PathBuf,
+    /// The display window: the whole image.
     pub display: PixelBounds,
+    /// The data window: the pixels the file holds.
     pub data: PixelBounds,
     /// Whether every one of R, G, B is stored as a 16-bit float.
     pub half: bool,

@@ -15,6 +15,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// How EXR pixels are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ExrOptions {
+    /// How scan-line blocks are compressed.
     pub compression: ExrCompression,
     /// 16-bit floats (`--half`) instead of 32-bit.
     pub half: bool,
@@ -34,7 +35,9 @@ impl Default for ExrOptions {
 /// "Output"); ZIP makes the smaller `--half` files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExrCompression {
+    /// Raw samples.
     None,
+    /// Run-length encoding of bytes, one scan line per block: no gain on float renders.
     Rle,
     /// zlib over blocks of 16 scan lines.
     Zip,
@@ -43,8 +46,10 @@ pub enum ExrCompression {
 }
 
 impl ExrCompression {
+    /// The names `--exr-compression` takes, the default first.
     pub const NAMES: [&'static str; 4] = ["piz", "zip", "rle", "none"];
 
+    /// The compression of a name in [`Self::NAMES`].
     pub fn from_name(name: &str) -> Option<Self> {
         Some(match name {
             "none" => ExrCompression::None,
@@ -254,14 +259,17 @@ fn write_exr<W: Write + Seek>(
                 failure = Some(e);
                 return Err(exr_error.unwrap_or(exr::error::Error::Aborted));
             }
-            done += emit(&pending, done, true)?;
-            if done != ph {
+            // only the part's last block may be short (the exr crate sizes a block from its
+            // position; PIZ indexes out of range on a short one anywhere else)
+            let rendered = done + pending.len() / pw;
+            if rendered != ph {
                 failure = Some(Error::image(
                     path,
-                    format!("{done} of the part's {ph} rows were rendered"),
+                    format!("{rendered} of the part's {ph} rows were rendered"),
                 ));
                 return Err(exr::error::Error::Aborted);
             }
+            emit(&pending, done, true)?;
             Ok(())
         },
     );

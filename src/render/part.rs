@@ -18,7 +18,12 @@ pub enum Part {
     /// bottom. Band `I` takes tile rows `floor(I T / N) .. floor((I + 1) T / N)` of the image's
     /// `T = ceil(height / 16)`: the split depends on `I`, `N` and the height only, so every
     /// task of an array job computes the same split, and every part sits on the tile grid.
-    Tile { index: u32, count: u32 },
+    Tile {
+        /// Which band, from 0.
+        index: u32,
+        /// How many bands.
+        count: u32,
+    },
 }
 
 impl Part {
