@@ -105,6 +105,17 @@ fn open(path: &Path) -> Result<(PartHeader, Decoder)> {
             .ok_or_else(|| Error::image(path, format!("no {name} channel; a part holds R, G, B")))
     };
     let channels = [find("R")?, find("G")?, find("B")?];
+    if let Some(c) = h
+        .channels
+        .list
+        .iter()
+        .find(|c| c.sampling.0 != 1 || c.sampling.1 != 1)
+    {
+        return Err(Error::image(
+            path,
+            format!("channel {} is subsampled; a part holds every pixel", c.name),
+        ));
+    }
     let half = channels
         .iter()
         .all(|&c| h.channels.list[c].sample_type == SampleType::F16);
