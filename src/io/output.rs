@@ -370,8 +370,18 @@ mod tests {
     /// and no temporary file; one that succeeds replaces it and leaves nothing else either.
     #[test]
     fn failed_writes_leave_the_old_file_and_no_temporary() {
-        for ext in ["exr", "png"] {
-            let d = dir(&format!("atomic-{ext}"));
+        for (ext, compression) in [
+            ("exr", ExrCompression::Piz),
+            ("exr", ExrCompression::Zip),
+            ("exr", ExrCompression::Rle),
+            ("exr", ExrCompression::None),
+            ("png", ExrCompression::Piz),
+        ] {
+            let opts = ExrOptions {
+                compression,
+                half: false,
+            };
+            let d = dir(&format!("atomic-{ext}-{compression:?}"));
             let path = d.join(format!("render.{ext}"));
             std::fs::write(&path, b"the good image").unwrap();
             let part = PixelBounds::full(64, 48);
@@ -380,21 +390,13 @@ mod tests {
                 sink(0, &row)?;
                 Err(Error::Usage("the render failed midway".into()))
             };
-            let r = write_streamed(
-                &path,
-                (64, 48),
-                part,
-                ExrOptions::default(),
-                &mut fail_after_one_band,
-            );
+            let r = write_streamed(&path, (64, 48), part, opts, &mut fail_after_one_band);
             assert!(r.unwrap_err().to_string().contains("failed midway"));
             assert_eq!(std::fs::read(&path).unwrap(), b"the good image");
             assert_eq!(listing(&d), [format!("render.{ext}")]);
 
             // too few rows is an error too, not a short image
-            let r = write_streamed(&path, (64, 48), part, ExrOptions::default(), &mut |s| {
-                s(0, &row)
-            });
+            let r = write_streamed(&path, (64, 48), part, opts, &mut |s| s(0, &row));
             assert!(
                 r.unwrap_err()
                     .to_string()
@@ -403,7 +405,7 @@ mod tests {
             assert_eq!(std::fs::read(&path).unwrap(), b"the good image");
             assert_eq!(listing(&d), [format!("render.{ext}")]);
 
-            write_streamed(&path, (64, 48), part, ExrOptions::default(), &mut |s| {
+            write_streamed(&path, (64, 48), part, opts, &mut |s| {
                 (0..3).try_for_each(|b| s(b * 16, &row))
             })
             .unwrap();
