@@ -300,7 +300,7 @@ fn encode_lines(rows: &[Vec3], width: usize, half: bool) -> Vec<u8> {
 }
 
 /// The part as an 8-bit sRGB PNG, rows deflated as they come (the image crate's defaults:
-/// balanced compression, adaptive filters).
+/// fast compression, adaptive filters, as whitted wrote PNGs before).
 fn write_png<W: Write>(
     out: W,
     path: &Path,
@@ -311,7 +311,7 @@ fn write_png<W: Write>(
     let mut encoder = png::Encoder::new(out, part.width(), part.height());
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Balanced);
+    encoder.set_compression(png::Compression::Fast);
     encoder.set_filter(png::Filter::Adaptive);
     let mut writer = encoder.write_header().map_err(png_err)?;
     let mut stream = writer.stream_writer().map_err(png_err)?;
