@@ -72,9 +72,43 @@ pub fn info(path: &Path) -> Result<Info> {
         _ => {
             let bytes = crate::io::read_regular(path)?;
             let (_, img) = decode_texture(&bytes, path)?;
-            Ok(image_fields("image", &img))
+            let mut info = image_fields("image", &img);
+            if img.format == "exr" {
+                info.fields.extend(exr_windows(&bytes));
+            }
+            Ok(info)
         }
     }
+}
+
+/// An EXR's display window (the whole image) and data window (the pixels stored: a part, for
+/// `render --tile/--crop`), as `{"x": [x0, x1], "y": [y0, y1]}` with exclusive ends, and its
+/// compression. The file decoded already, so its header is valid.
+fn exr_windows(bytes: &[u8]) -> Vec<(&'static str, Value)> {
+    let Ok(meta) = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+    else {
+        return Vec::new();
+    };
+    let Some(h) = meta.headers.first() else {
+        return Vec::new();
+    };
+    let window = |x0: i32, y0: i32, w: usize, h: usize| json!({"x": [x0 as i64, x0 as i64 + w as i64], "y": [y0 as i64, y0 as i64 + h as i64]});
+    let d = &h.shared_attributes.display_window;
+    let p = h.own_attributes.layer_position;
+    vec![
+        (
+            "display_window",
+            window(d.position.0, d.position.1, d.size.0, d.size.1),
+        ),
+        (
+            "data_window",
+            window(p.0, p.1, h.layer_size.0, h.layer_size.1),
+        ),
+        (
+            "compression",
+            json!(format!("{:?}", h.compression).to_ascii_lowercase()),
+        ),
+    ]
 }
 
 /// An f32 as the f64 with the same shortest decimal form (0.1, not 0.10000000149011612).

@@ -283,28 +283,18 @@ fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
     ))
 }
 
-/// Write a render: `.exr` as linear 32-bit float RGB, `.png` clamped and sRGB-encoded 8-bit.
+/// Write a render: `.exr` as linear float RGB (PIZ-compressed 32-bit, see
+/// [`crate::io::output`]), `.png` clamped and sRGB-encoded 8-bit; through a temporary file, so
+/// a failed write leaves what `path` held.
 pub fn save_image(image: &Image, path: &Path) -> Result<()> {
-    let ext = crate::io::extension(path);
-    match ext.as_str() {
-        "exr" => exr::prelude::write_rgb_file(path, image.width, image.height, |x, y| {
-            let p = image.get(x, y);
-            (p.x, p.y, p.z)
-        })
-        .map_err(|e| Error::image(path, format!("cannot write EXR: {e}"))),
-        "png" => image::save_buffer(
-            path,
-            &image.to_srgb8(),
-            image.width as u32,
-            image.height as u32,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| Error::image(path, format!("cannot write PNG: {e}"))),
-        _ => Err(Error::Usage(format!(
-            "{}: unknown output format (use .png or .exr)",
-            path.display()
-        ))),
-    }
+    let (w, h) = (image.width as u32, image.height as u32);
+    crate::io::output::write_streamed(
+        path,
+        (w, h),
+        crate::image::PixelBounds::full(w, h),
+        crate::io::output::ExrOptions::default(),
+        &mut |sink| sink(0, &image.pixels),
+    )
 }
 
 /// Read a linear RGB EXR back (for tests and comparisons).

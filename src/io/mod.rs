@@ -2,8 +2,10 @@
 
 pub mod fuzz;
 pub mod image;
+pub mod merge;
 pub mod mfile;
 pub mod obj;
+pub mod output;
 pub mod rays;
 pub mod scene_file;
 
