@@ -1,9 +1,9 @@
 //! `whitted info FILE`: what a mesh, scene, image or cube-map folder holds, after the same
 //! validation as loading it for a render. As `key: value` lines or one JSON object.
 
-use crate::error::Result;
-use crate::io::image::{ImageInfo, decode_texture, load_cubemap_info};
-use crate::io::load_mesh_detail;
+use crate::error::{Error, Result};
+use crate::io::image::{IMAGE_EXTENSIONS, ImageInfo, decode_texture, load_cubemap_info};
+use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
 use crate::mesh::Mesh;
 use crate::scene::Background;
@@ -62,7 +62,7 @@ pub fn info(path: &Path) -> Result<Info> {
     }
     let ext = crate::io::extension(path);
     match ext.as_str() {
-        "m" | "obj" => {
+        e if crate::io::MESH_EXTENSIONS.contains(&e) => {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
             let mut info = mesh_fields(&mesh, &ext, file_normals);
             info.warnings = warnings;
@@ -71,10 +71,29 @@ pub fn info(path: &Path) -> Result<Info> {
         "toml" => scene_info(path),
         _ => {
             let bytes = crate::io::read_regular(path)?;
-            let (_, img) = decode_texture(&bytes, path)?;
-            Ok(image_fields("image", &img))
+            let known = IMAGE_EXTENSIONS.contains(&ext.as_str());
+            // An image is also recognised by its content, whatever its name.
+            match decode_texture(&bytes, path) {
+                Ok((_, img)) => Ok(image_fields("image", &img)),
+                Err(Error::Image { msg, .. }) if !known && msg.starts_with("not a supported") => {
+                    Err(Error::Format {
+                        path: path.to_path_buf(),
+                        msg: format!("not a file type whitted reads; {}", file_types()),
+                    })
+                }
+                Err(e) => Err(e),
+            }
         }
     }
+}
+
+/// What `whitted info` reads, for its message about a file it does not.
+fn file_types() -> String {
+    format!(
+        "it reads meshes ({}), scenes (.toml), images ({}) and cube-map folders",
+        list_extensions(&MESH_EXTENSIONS),
+        list_extensions(&IMAGE_EXTENSIONS)
+    )
 }
 
 /// An f32 as the f64 with the same shortest decimal form (0.1, not 0.10000000149011612).

@@ -213,7 +213,7 @@ fn cmd_scene(name: &str) -> Result<()> {
         ))
     })?;
     print!(
-        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, then the folders of WHITTED_ASSETS.\n{}",
+        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, the folders of WHITTED_ASSETS, then whitted's own data folder.\n{}",
         s.to_toml()
     );
     Ok(())

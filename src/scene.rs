@@ -168,6 +168,13 @@ impl Geometry {
 pub mod shapes {
     use super::*;
 
+    /// Triangles of [`sphere`] with `segments`, known before it is made (for the scene caps).
+    pub fn sphere_triangle_count(segments: u32) -> u64 {
+        let (nu, nv) = (segments.max(3) as u64 * 2, segments.max(2) as u64);
+        // Every band has 2 triangles per segment, except the two polar bands (1 each).
+        2 * nu * (nv - 1)
+    }
+
     /// A UV sphere with outward normals and `(u, v)` = (longitude, latitude) in [0, 1].
     pub fn sphere(center: Vec3, radius: f32, segments: u32) -> Mesh {
         let (nu, nv) = (segments.max(3) * 2, segments.max(2));
@@ -263,6 +270,10 @@ pub mod shapes {
 
         #[test]
         fn shapes_are_closed_and_outward() {
+            for seg in [0, 1, 2, 3, 8, 48] {
+                let n = sphere(Vec3::ZERO, 1.0, seg).triangles.len() as u64;
+                assert_eq!(n, sphere_triangle_count(seg), "{seg} segments");
+            }
             let s = sphere(Vec3::ZERO, 2.0, 8);
             // (The uv seam and the poles duplicate vertices, so open_edges() is not 0.)
             assert_eq!(s.degenerate_count(), 0);

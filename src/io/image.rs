@@ -10,6 +10,10 @@ use std::path::{Path, PathBuf};
 /// 2^25, e.g. 8192 x 4096; such a texture takes 400 MB as linear f32 RGB.
 pub const MAX_TEXTURE_PIXELS: u64 = 1 << 25;
 
+/// Image file extensions the texture loader reads, in lower case (it also recognises the
+/// formats by content).
+pub const IMAGE_EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "tga", "bmp", "hdr", "exr"];
+
 /// What a decoded image file was: its format, size and channel layout (for `whitted info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageInfo {
@@ -271,7 +275,7 @@ pub fn decode_cubemap_capped(
 }
 
 fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
-    for ext in ["png", "jpg", "jpeg", "tga", "bmp", "hdr", "exr"] {
+    for ext in IMAGE_EXTENSIONS {
         let p = dir.join(format!("{name}.{ext}"));
         if p.is_file() {
             return Ok(p);
