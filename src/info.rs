@@ -3,8 +3,8 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{IMAGE_EXTENSIONS, ImageInfo, decode_texture, load_cubemap_info};
-use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::mesh::Mesh;
 use crate::scene::Background;
 use serde_json::{Value, json};

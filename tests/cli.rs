@@ -292,7 +292,9 @@ fn wrong_file_types_say_what_is_expected() {
         ),
         (
             vec!["info".to_string(), ply.display().to_string()],
-            vec!["x.ply: not a file type whitted reads; it reads meshes (.m, .obj), scenes (.toml)"],
+            vec![
+                "x.ply: not a file type whitted reads; it reads meshes (.m, .obj), scenes (.toml)",
+            ],
         ),
     ];
     for (args, wants) in cases {

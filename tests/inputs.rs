@@ -661,7 +661,10 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
         std::fs::read(p).unwrap()
     };
     let mut files: Vec<(String, Vec<u8>)> = vec![
-        ("meshes/bad.m".into(), b"Vertex 1 0 0 0\nVertex 2 NaN 0 0\n".to_vec()),
+        (
+            "meshes/bad.m".into(),
+            b"Vertex 1 0 0 0\nVertex 2 NaN 0 0\n".to_vec(),
+        ),
         ("meshes/shape.stl".into(), b"solid x\n".to_vec()),
         ("meshes/folder.m/".into(), vec![]),
         ("tex/folder.png/".into(), vec![]),
@@ -765,19 +768,29 @@ fn partial_vertex_attributes_load_and_take_the_materials_colour() {
         Vertex 3 0 1 0 {normal=(0 0 1)}\nFace 1 1 2 3\n";
     let dir = scene_dir("partial", &[("p.m", partial)]);
     for (od, fill) in [
-        ("vertex_color = true\ncolor = [0.2, 0.3, 0.4]", [0.2, 0.3, 0.4]),
+        (
+            "vertex_color = true\ncolor = [0.2, 0.3, 0.4]",
+            [0.2, 0.3, 0.4],
+        ),
         ("vertex_color = true", [1.0; 3]),
     ] {
         let (scene, warnings) = build_ref(&dir, COLOR_BG, od, "file = \"p.m\"").unwrap();
         let w: Vec<_> = warnings.iter().filter(|w| w.contains("p.m")).collect();
         assert_eq!(w.len(), 1, "one warning: {warnings:?}");
-        for want in ["1 of 3 have no rgb", "2 of 3 have no uv", "2 of 3 have no normal"] {
+        for want in [
+            "1 of 3 have no rgb",
+            "2 of 3 have no uv",
+            "2 of 3 have no normal",
+        ] {
             assert!(w[0].contains(want), "{want}: {}", w[0]);
         }
         let colors = scene.objects[1].mesh.colors.as_ref().unwrap();
         assert_eq!(colors[0], glam::Vec3::X);
         assert_eq!(colors[2], glam::Vec3::from(fill), "{od}");
-        assert_eq!(scene.objects[1].mesh.uvs.as_ref().unwrap()[1], glam::Vec2::ZERO);
+        assert_eq!(
+            scene.objects[1].mesh.uvs.as_ref().unwrap()[1],
+            glam::Vec2::ZERO
+        );
     }
     // A colour beside a texture or checker is still refused: one source of Od each.
     let e = build_ref(
@@ -833,10 +846,7 @@ fn caps_are_checked_before_generating_shapes() {
 /// `whitted info` on a file type it does not read says which types it does.
 #[test]
 fn info_on_an_unknown_file_type_lists_the_types() {
-    let dir = scene_dir(
-        "info",
-        &[("x.ply", b"ply\nformat ascii 1.0\nend_header\n")],
-    );
+    let dir = scene_dir("info", &[("x.ply", b"ply\nformat ascii 1.0\nend_header\n")]);
     let e = whitted::info::run(&dir.join("x.ply"), false)
         .unwrap_err()
         .to_string();

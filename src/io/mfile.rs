@@ -174,8 +174,12 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
                 .collect::<Vec<Vec3>>(),
         )
     };
-    let uvs = partial(&|a| a.uv.map(|v| v.extend(0.0)), Vec3::ZERO, "uv (set to (0, 0))")
-        .map(|v| v.into_iter().map(|p| p.truncate()).collect());
+    let uvs = partial(
+        &|a| a.uv.map(|v| v.extend(0.0)),
+        Vec3::ZERO,
+        "uv (set to (0, 0))",
+    )
+    .map(|v| v.into_iter().map(|p| p.truncate()).collect());
     let colors = partial(&|a| a.rgb, Vec3::ONE, "rgb (the material's colour)");
     // A zero normal is replaced by the area-weighted one in `ensure_normals` below.
     let normals = partial(&|a| a.normal, Vec3::ZERO, "normal (area-weighted)");
