@@ -13,6 +13,7 @@ use std::path::Path;
 /// An ordered list of facts about one file; `kind` comes first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {
+    /// `(key, value)` in print order.
     pub fields: Vec<(&'static str, Value)>,
     /// Loader warnings (degenerate faces, ignored `.mtl`, ...).
     pub warnings: Vec<String>,

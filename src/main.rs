@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
-use whitted::render::{MAX_SAMPLE_SECONDARY_RAYS, Settings, Stage, World, render};
+use whitted::render::{Settings, Stage, World, render};
 use whitted::{Error, Result, scenes};
 
 #[derive(Parser)]
@@ -295,16 +295,8 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     };
     let (image, stats) = render(&world, &settings, &|n| bar.inc(n));
     bar.finish_and_clear();
-    if let Some((x, y)) = stats.over_budget_pixel(w) {
-        return Err(Error::scene(
-            &path,
-            format!(
-                "pixel ({x}, {y}): a camera sample spawned over {MAX_SAMPLE_SECONDARY_RAYS} \
-                 reflection and refraction rays (render.depth {}): rays are trapped between \
-                 surfaces that both reflect and refract; lower render.depth (--depth)",
-                settings.depth(&world.scene)
-            ),
-        ));
+    if let Some(msg) = stats.budget_error(&world, &settings) {
+        return Err(Error::scene(&path, msg));
     }
     whitted::io::image::save_image(&image, &out)?;
     if !args.quiet {

@@ -17,8 +17,11 @@ pub const IMAGE_EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "tga", "bmp", "hd
 /// What a decoded image file was: its format, size and channel layout (for `whitted info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageInfo {
+    /// The decoder's name for the format (`png`, `jpeg`, `exr`, ...).
     pub format: String,
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
     /// Channels in the file (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; EXR: its channel count).
     pub channels: usize,

@@ -30,18 +30,27 @@ pub const MAX_SCENE_TRIANGLES: u64 = 1 << 25;
 /// Most texels all `checker` materials of a scene may allocate together (2 of 4096 x 4096).
 pub const MAX_CHECKER_TEXELS: u64 = 1 << 25;
 
+/// A scene file as written: the TOML format of the README, before validation. [`build_scene`]
+/// turns it into a [`Scene`]; [`scenes::builtin`](crate::scenes::builtin) makes the built-in ones.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
+    /// `[image]`: the output size.
     pub image: ImageDesc,
+    /// `[camera]`: the pinhole camera.
     pub camera: CameraDesc,
+    /// `[render]`: depth, culling, ambient light (all optional).
     #[serde(default)]
     pub render: RenderDesc,
+    /// `[background]`: a colour or a cube map.
     pub background: BackgroundDesc,
+    /// `[[light]]`: point lights.
     #[serde(default, rename = "light")]
     pub lights: Vec<LightDesc>,
+    /// `[[material]]`: named materials.
     #[serde(default, rename = "material")]
     pub materials: Vec<MaterialDesc>,
+    /// `[[mesh]]`: meshes from files, inline triangles or generated shapes.
     #[serde(default, rename = "mesh")]
     pub meshes: Vec<MeshDesc>,
     /// Lines of the keys in the text this was parsed from (empty for scenes made in code).
@@ -98,22 +107,30 @@ impl KeyLines {
     }
 }
 
+/// `[image]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ImageDesc {
+    /// Pixels across (the image must have at most `MAX_PIXELS`).
     pub width: u64,
+    /// Pixels down.
     pub height: u64,
 }
 
+/// `[camera]` (SCENES.md §1).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    /// The eye point.
     #[serde(deserialize_with = "exact3::de")]
     pub eye: [f32; 3],
+    /// The point looked at.
     #[serde(deserialize_with = "exact3::de")]
     pub look_at: [f32; 3],
+    /// The up direction (default +y); must not be parallel to the view direction.
     #[serde(default = "default_up", deserialize_with = "exact3::de")]
     pub up: [f32; 3],
+    /// Vertical field of view in degrees, in (0, 180).
     pub vfov: f32,
 }
 
@@ -151,13 +168,17 @@ fn default_up() -> [f32; 3] {
     [0.0, 1.0, 0.0]
 }
 
+/// `[render]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RenderDesc {
+    /// Reflection / refraction bounces (default 1, at most `MAX_DEPTH`).
     #[serde(default = "default_depth")]
     pub depth: u32,
+    /// Skip back faces, for every ray (default true).
     #[serde(default = "default_true")]
     pub cull_backfaces: bool,
+    /// Ambient light `Ia` (default black).
     #[serde(default, deserialize_with = "exact3::de")]
     pub ambient: [f32; 3],
 }
@@ -179,9 +200,11 @@ fn default_true() -> bool {
     true
 }
 
+/// `[background]`: exactly one of `color` or `cubemap`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundDesc {
+    /// A constant colour (linear RGB).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -193,18 +216,23 @@ pub struct BackgroundDesc {
     pub cubemap: Option<String>,
 }
 
+/// `[[light]]`: a point light.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
+    /// Where it is.
     #[serde(deserialize_with = "exact3::de")]
     pub position: [f32; 3],
+    /// Its RGB intensity `Ip` (>= 0).
     #[serde(deserialize_with = "exact3::de")]
     pub intensity: [f32; 3],
 }
 
+/// `[[material]]`: Whitted's coefficients and where `Od` comes from.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
+    /// The name meshes refer to it by (unique).
     pub name: String,
     /// Exactly one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`.
     #[serde(
@@ -213,18 +241,28 @@ pub struct MaterialDesc {
         deserialize_with = "exact3::opt"
     )]
     pub color: Option<[f32; 3]>,
+    /// `Od` is the interpolated vertex `rgb` of the mesh; `color`, if also given, colours the
+    /// vertices of a `.m` file that gives only some of them an rgb (white without it).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub vertex_color: bool,
+    /// `Od` from an image file at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<String>,
+    /// `Od` from a procedural checker at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checker: Option<CheckerDesc>,
+    /// Ambient coefficient.
     pub ka: f32,
+    /// Diffuse coefficient.
     pub kd: f32,
+    /// Specular (and reflection) coefficient.
     pub ks: f32,
+    /// Phong exponent.
     pub n: f32,
+    /// Transmission coefficient (default 0).
     #[serde(default)]
     pub kt: f32,
+    /// Index of refraction (default 1.5, > 0).
     #[serde(default = "default_ior")]
     pub ior: f32,
 }
@@ -237,18 +275,24 @@ fn default_ior() -> f32 {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CheckerDesc {
+    /// Cells per side, in 1..=4096.
     pub squares: u32,
+    /// The colour of cell (0, 0)'s kind.
     #[serde(deserialize_with = "exact3::de")]
     pub a: [f32; 3],
+    /// The other colour.
     #[serde(deserialize_with = "exact3::de")]
     pub b: [f32; 3],
 }
 
+/// `[[mesh]]`: exactly one of `file`, `vertices` + `faces`, or `shape`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MeshDesc {
+    /// A name for messages and `whitted info` (default: the file name or `meshN`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
+    /// The material's name.
     pub material: String,
     /// A `.m` or `.obj` file ...
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -260,6 +304,7 @@ pub struct MeshDesc {
         deserialize_with = "exact3::opt_vec"
     )]
     pub vertices: Option<Vec<[f32; 3]>>,
+    /// Triangles of the inline vertices (0-based indices).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -270,14 +315,17 @@ pub struct MeshDesc {
     /// (center, size; a horizontal square facing +y).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<String>,
+    /// Centre of a generated shape (default the origin).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
         deserialize_with = "exact3::opt"
     )]
     pub center: Option<[f32; 3]>,
+    /// Radius of a `sphere` (default 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<f32>,
+    /// Size of a `cube` (x, y, z) or a `quad` (x, z) (default 1).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -323,6 +371,7 @@ impl SceneFile {
         SceneFile::parse(text, path)
     }
 
+    /// The scene as TOML text (what `whitted scene NAME` prints).
     pub fn to_toml(&self) -> String {
         toml::to_string(self).expect("scene serialises")
     }
