@@ -78,7 +78,14 @@ impl KeyLines {
         let Ok(doc) = DeTable::parse(text) else {
             return KeyLines(out);
         };
-        let line = |at: usize| line_col(text.as_bytes(), at).0;
+        // Newline offsets, found once: a line is a binary search (a scene of thousands of
+        // entries would otherwise rescan its text per key).
+        let newlines: Vec<usize> = text
+            .bytes()
+            .enumerate()
+            .filter_map(|(i, b)| (b == b'\n').then_some(i))
+            .collect();
+        let line = |at: usize| newlines.partition_point(|&n| n < at) + 1;
         let table = |prefix: String, t: &DeTable, out: &mut Vec<(String, usize)>| {
             for (k, _) in t.iter() {
                 out.push((format!("{prefix}.{}", k.get_ref()), line(k.span().start)));
@@ -1072,6 +1079,24 @@ faces = [[0, 1, 2]]
         assert_eq!(s.objects[0].mesh.triangles.len(), 1);
         let f = SceneFile::parse(MINIMAL, Path::new("s")).unwrap();
         assert_eq!(SceneFile::parse(&f.to_toml(), Path::new("s")).unwrap(), f);
+    }
+
+    #[test]
+    fn key_lines_point_at_keys() {
+        let text = "a = 1\n[image]\nwidth = 4\n[background]\ncubemap = \"sky\"\n[[mesh]]\n\
+            file = \"a.m\"\n[[mesh]]\n\nfile = \"b.m\"\n";
+        let lines = KeyLines::of(text);
+        for (key, line) in [
+            ("a", 1),
+            ("image.width", 3),
+            ("background.cubemap", 5),
+            ("mesh[0].file", 7),
+            ("mesh[1].file", 10),
+        ] {
+            assert_eq!(lines.line(key), Some(line), "{key}");
+        }
+        assert_eq!(lines.line("mesh[2].file"), None);
+        assert!(KeyLines::of("not toml = = =").line("a").is_none());
     }
 
     #[test]
