@@ -307,3 +307,39 @@ fn wrong_file_types_say_what_is_expected() {
         }
     }
 }
+
+/// The example, end to end: a scene rendered from its own folder names itself, the
+/// line and key of the entry, then the mesh's own file and line.
+#[test]
+fn error_in_a_mesh_names_scene_key_then_file() {
+    let dir = tmp("badmesh");
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    std::fs::write(
+        dir.join("meshes/bad.m"),
+        "Vertex 1 0 0 0\nVertex 2 NaN 0 0\n",
+    )
+    .unwrap();
+    let r = whitted().args(["scene", "phong"]).output().unwrap();
+    let scene = String::from_utf8(r.stdout)
+        .unwrap()
+        .replace("meshes/kitten.m", "meshes/bad.m");
+    let line = 1 + scene
+        .lines()
+        .position(|l| l.contains("meshes/bad.m"))
+        .unwrap();
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let r = whitted()
+        .args(["render", "scene.toml", "-q"])
+        .current_dir(&dir)
+        .env_remove("WHITTED_ASSETS")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert_eq!(
+        stderr.trim(),
+        format!(
+            "error: scene.toml:{line}: mesh[0].file: meshes/bad.m:2: Vertex 2: 'NaN' is not a finite number"
+        )
+    );
+}

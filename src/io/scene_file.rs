@@ -477,7 +477,14 @@ impl SearchPath {
         }
         self.dirs
             .iter()
-            .map(|d| d.join(p))
+            // `./meshes/x.m` reads better in messages as `meshes/x.m`.
+            .map(|d| {
+                if d == Path::new(".") {
+                    p.to_path_buf()
+                } else {
+                    d.join(p)
+                }
+            })
             .find(|c| c.exists())
             .ok_or_else(|| Error::NotFound {
                 name: name.into(),
