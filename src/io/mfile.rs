@@ -159,30 +159,28 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     // An attribute on some vertices only: the others get `fill` (and are counted).
     let n = attrs.len();
     let mut gaps = Vec::new();
-    let mut partial = |get: &dyn Fn(&VertexAttrs) -> Option<Vec3>, fill: Vec3, what: &str| {
-        let given = attrs.iter().filter(|(a, _)| get(a).is_some()).count();
-        if given == 0 {
-            return None;
-        }
-        if given < n {
-            gaps.push(format!("{} of {n} have no {what}", n - given));
-        }
-        Some(
-            attrs
-                .iter()
-                .map(|(a, _)| get(a).unwrap_or(fill))
-                .collect::<Vec<Vec3>>(),
-        )
-    };
     let uvs = partial(
-        &|a| a.uv.map(|v| v.extend(0.0)),
-        Vec3::ZERO,
+        &attrs,
+        |a| a.uv,
+        Vec2::ZERO,
         "uv (set to (0, 0))",
-    )
-    .map(|v| v.into_iter().map(|p| p.truncate()).collect());
-    let colors = partial(&|a| a.rgb, Vec3::ONE, "rgb (the material's colour)");
+        &mut gaps,
+    );
+    let colors = partial(
+        &attrs,
+        |a| a.rgb,
+        Vec3::ONE,
+        "rgb (the material's colour)",
+        &mut gaps,
+    );
     // A zero normal is replaced by the area-weighted one in `ensure_normals` below.
-    let normals = partial(&|a| a.normal, Vec3::ZERO, "normal (area-weighted)");
+    let normals = partial(
+        &attrs,
+        |a| a.normal,
+        Vec3::ZERO,
+        "normal (area-weighted)",
+        &mut gaps,
+    );
     if !gaps.is_empty() {
         warnings.push(format!(
             "{}: some vertices lack attributes others have: {}",
@@ -218,6 +216,29 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
         file_normals,
         missing_rgb,
     })
+}
+
+/// One attribute per vertex when any vertex has it (`None` when none does): the vertices
+/// without it get `fill`, and a gap note (`2 of 5 have no uv ...`) is added to `gaps`.
+fn partial<T: Copy>(
+    attrs: &[(VertexAttrs, usize)],
+    get: impl Fn(&VertexAttrs) -> Option<T>,
+    fill: T,
+    what: &str,
+    gaps: &mut Vec<String>,
+) -> Option<Vec<T>> {
+    let given = attrs.iter().filter(|(a, _)| get(a).is_some()).count();
+    if given == 0 {
+        return None;
+    }
+    if given < attrs.len() {
+        gaps.push(format!(
+            "{} of {} have no {what}",
+            attrs.len() - given,
+            attrs.len()
+        ));
+    }
+    Some(attrs.iter().map(|(a, _)| get(a).unwrap_or(fill)).collect())
 }
 
 /// Split `head {body}` into its parts; the body must be the last thing on the line.
