@@ -5,12 +5,16 @@ use glam::Vec3;
 /// Linear RGB pixels, row-major, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// `width * height` linear RGB values, row-major.
     pub pixels: Vec<Vec3>,
 }
 
 impl Image {
+    /// A black image.
     pub fn new(width: usize, height: usize) -> Self {
         Image {
             width,
@@ -19,6 +23,7 @@ impl Image {
         }
     }
 
+    /// The pixel at column `x`, row `y` (row 0 at the top); panics outside the image.
     pub fn get(&self, x: usize, y: usize) -> Vec3 {
         self.pixels[y * self.width + x]
     }

@@ -1,10 +1,10 @@
 //! `whitted info FILE`: what a mesh, scene, image or cube-map folder holds, after the same
 //! validation as loading it for a render. As `key: value` lines or one JSON object.
 
-use crate::error::Result;
-use crate::io::image::{ImageInfo, decode_texture, load_cubemap_info};
-use crate::io::load_mesh_detail;
+use crate::error::{Error, Result};
+use crate::io::image::{IMAGE_EXTENSIONS, ImageInfo, decode_texture, load_cubemap_info};
 use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::mesh::Mesh;
 use crate::scene::Background;
 use serde_json::{Value, json};
@@ -13,6 +13,7 @@ use std::path::Path;
 /// An ordered list of facts about one file; `kind` comes first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {
+    /// `(key, value)` in print order.
     pub fields: Vec<(&'static str, Value)>,
     /// Loader warnings (degenerate faces, ignored `.mtl`, ...).
     pub warnings: Vec<String>,
@@ -62,7 +63,7 @@ pub fn info(path: &Path) -> Result<Info> {
     }
     let ext = crate::io::extension(path);
     match ext.as_str() {
-        "m" | "obj" => {
+        e if crate::io::MESH_EXTENSIONS.contains(&e) => {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
             let mut info = mesh_fields(&mesh, &ext, file_normals);
             info.warnings = warnings;
@@ -71,12 +72,24 @@ pub fn info(path: &Path) -> Result<Info> {
         "toml" => scene_info(path),
         _ => {
             let bytes = crate::io::read_regular(path)?;
-            let (_, img) = decode_texture(&bytes, path)?;
-            let mut info = image_fields("image", &img);
-            if img.format == "exr" {
-                info.fields.extend(exr_windows(&bytes));
+            let known = IMAGE_EXTENSIONS.contains(&ext.as_str());
+            // An image is also recognised by its content, whatever its name.
+            match decode_texture(&bytes, path) {
+                Ok((_, img)) => {
+                    let mut info = image_fields("image", &img);
+                    if img.format == "exr" {
+                        info.fields.extend(exr_windows(&bytes));
+                    }
+                    Ok(info)
+                }
+                Err(Error::Image { msg, .. }) if !known && msg.starts_with("not a supported") => {
+                    Err(Error::Format {
+                        path: path.to_path_buf(),
+                        msg: format!("not a file type whitted reads; {}", file_types()),
+                    })
+                }
+                Err(e) => Err(e),
             }
-            Ok(info)
         }
     }
 }
@@ -109,6 +122,15 @@ fn exr_windows(bytes: &[u8]) -> Vec<(&'static str, Value)> {
             json!(format!("{:?}", h.compression).to_ascii_lowercase()),
         ),
     ]
+}
+
+/// What `whitted info` reads, for its message about a file it does not.
+fn file_types() -> String {
+    format!(
+        "it reads meshes ({}), scenes (.toml), images ({}) and cube-map folders",
+        list_extensions(&MESH_EXTENSIONS),
+        list_extensions(&IMAGE_EXTENSIONS)
+    )
 }
 
 /// An f32 as the f64 with the same shortest decimal form (0.1, not 0.10000000149011612).

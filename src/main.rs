@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
-use whitted::render::{MAX_SAMPLE_SECONDARY_RAYS, Settings, Stage, World};
+use whitted::render::{Settings, Stage, World};
 use whitted::{Error, Result, scenes};
 
 #[derive(Parser)]
@@ -315,7 +315,7 @@ fn cmd_scene(name: &str) -> Result<()> {
         ))
     })?;
     print!(
-        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, then the folders of WHITTED_ASSETS.\n{}",
+        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, the folders of WHITTED_ASSETS, then whitted's own data folder.\n{}",
         s.to_toml()
     );
     Ok(())
@@ -418,19 +418,11 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let mut stats = None;
     let wrote = whitted::io::output::write_streamed(&out, (w, h), part, exr, &mut |sink| {
         let s = whitted::render::render_rows(&world, &settings, part, &|n| bar.inc(n), sink)?;
-        let over = s.over_budget_pixel(w);
+        let over = s.budget_error(&world, &settings);
         stats = Some(s);
         match over {
             None => Ok(()),
-            Some((x, y)) => Err(Error::scene(
-                &path,
-                format!(
-                    "pixel ({x}, {y}): a camera sample spawned over {MAX_SAMPLE_SECONDARY_RAYS} \
-                     reflection and refraction rays (render.depth {}): rays are trapped between \
-                     surfaces that both reflect and refract; lower render.depth (--depth)",
-                    settings.depth(&world.scene)
-                ),
-            )),
+            Some(msg) => Err(Error::scene(&path, msg)),
         }
     });
     bar.finish_and_clear();

@@ -252,3 +252,96 @@ fn deep_recursion_renders_where_rays_escape() {
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     }
 }
+
+/// The built-in scenes find the shipped data from any folder with no environment variable:
+/// the search path ends with the project's own data folder.
+#[test]
+fn canonical_scenes_render_from_another_folder_without_whitted_assets() {
+    let dir = tmp("elsewhere");
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in ["phong", "vertex_color", "texture", "cubemap", "refraction"] {
+        let r = whitted()
+            .args(["render", name, "--width", "32", "--height", "24", "-q"])
+            .current_dir(&dir)
+            .env_remove("WHITTED_ASSETS")
+            .output()
+            .unwrap();
+        assert!(
+            r.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let img = image::open(dir.join(format!("{name}.png"))).unwrap();
+        assert_eq!((img.width(), img.height()), (32, 24), "{name}");
+    }
+}
+
+/// A mesh given where a scene is expected says so and how to make a scene, instead of a TOML
+/// error; `whitted info` on a type it does not read lists the types it does.
+#[test]
+fn wrong_file_types_say_what_is_expected() {
+    let ply = tmp("x.ply");
+    std::fs::write(&ply, "ply\nformat ascii 1.0\nend_header\n").unwrap();
+    let cube = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let cases = [
+        (
+            vec!["render".to_string(), cube.display().to_string()],
+            vec![
+                "cube.obj: this is a mesh (.obj), but a scene file (.toml) is expected",
+                "`whitted scene phong > my.toml`",
+                "`whitted render my.toml`",
+            ],
+        ),
+        (
+            vec!["info".to_string(), ply.display().to_string()],
+            vec![
+                "x.ply: not a file type whitted reads; it reads meshes (.m, .obj), scenes (.toml)",
+            ],
+        ),
+    ];
+    for (args, wants) in cases {
+        let r = whitted().args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+        for want in wants {
+            assert!(stderr.contains(want), "{args:?}: want {want:?} in {stderr}");
+        }
+    }
+}
+
+/// The example, end to end: a scene rendered from its own folder names itself, the
+/// line and key of the entry, then the mesh's own file and line.
+#[test]
+fn error_in_a_mesh_names_scene_key_then_file() {
+    let dir = tmp("badmesh");
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    std::fs::write(
+        dir.join("meshes/bad.m"),
+        "Vertex 1 0 0 0\nVertex 2 NaN 0 0\n",
+    )
+    .unwrap();
+    let r = whitted().args(["scene", "phong"]).output().unwrap();
+    let scene = String::from_utf8(r.stdout)
+        .unwrap()
+        .replace("meshes/kitten.m", "meshes/bad.m");
+    let line = 1 + scene
+        .lines()
+        .position(|l| l.contains("meshes/bad.m"))
+        .unwrap();
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let r = whitted()
+        .args(["render", "scene.toml", "-q"])
+        .current_dir(&dir)
+        .env_remove("WHITTED_ASSETS")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert_eq!(
+        stderr.trim(),
+        format!(
+            "error: scene.toml:{line}: mesh[0].file: meshes/bad.m:2: Vertex 2: 'NaN' is not a finite number"
+        )
+    );
+}

@@ -10,11 +10,18 @@ use std::path::{Path, PathBuf};
 /// 2^25, e.g. 8192 x 4096; such a texture takes 400 MB as linear f32 RGB.
 pub const MAX_TEXTURE_PIXELS: u64 = 1 << 25;
 
+/// Image file extensions the texture loader reads, in lower case (it also recognises the
+/// formats by content).
+pub const IMAGE_EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "tga", "bmp", "hdr", "exr"];
+
 /// What a decoded image file was: its format, size and channel layout (for `whitted info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageInfo {
+    /// The decoder's name for the format (`png`, `jpeg`, `exr`, ...).
     pub format: String,
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
     /// Channels in the file (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; EXR: its channel count).
     pub channels: usize,
@@ -271,7 +278,7 @@ pub fn decode_cubemap_capped(
 }
 
 fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
-    for ext in ["png", "jpg", "jpeg", "tga", "bmp", "hdr", "exr"] {
+    for ext in IMAGE_EXTENSIONS {
         let p = dir.join(format!("{name}.{ext}"));
         if p.is_file() {
             return Ok(p);

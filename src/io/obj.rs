@@ -12,6 +12,7 @@ use crate::mesh::Mesh;
 use glam::{Vec2, Vec3};
 use std::path::Path;
 
+/// Read and load an OBJ file ([`parse_obj`] on its bytes).
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
     let bytes = super::read_regular(path)?;
     parse_obj(&bytes, path)

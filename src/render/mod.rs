@@ -20,6 +20,7 @@ use std::time::{Duration, Instant};
 /// Options of one render.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
+    /// One stage of the assignment, or `None` for the full scene.
     pub stage: Option<Stage>,
     /// Recursion depth; `None` uses the stage's (0 below `reflection`) or the scene's.
     pub depth: Option<u32>,
@@ -42,6 +43,7 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// The recursion depth this render uses for `scene`.
     pub fn depth(&self, scene: &Scene) -> u32 {
         match (self.depth, self.stage) {
             (Some(d), _) => d,
@@ -64,13 +66,18 @@ pub const MAX_SAMPLE_SECONDARY_RAYS: u32 = 1 << 14;
 /// Rays traced, by kind.
 #[derive(Debug, Default)]
 pub struct RayCounts {
+    /// Camera rays.
     pub primary: AtomicU64,
+    /// Shadow rays.
     pub shadow: AtomicU64,
+    /// Reflection rays.
     pub reflection: AtomicU64,
+    /// Refraction rays.
     pub refraction: AtomicU64,
 }
 
 impl RayCounts {
+    /// All rays of every kind.
     pub fn total(&self) -> u64 {
         [
             &self.primary,
@@ -87,7 +94,9 @@ impl RayCounts {
 /// What a render measured.
 #[derive(Debug, Default)]
 pub struct RenderStats {
+    /// Rays traced, by kind.
     pub rays: RayCounts,
+    /// Wall time of the render.
     pub time: Duration,
     /// Summed thread time (ns) per phase: primary intersection, shading, shadow rays,
     /// secondary intersection (wavefront engine only).
@@ -119,6 +128,7 @@ impl RenderStats {
 }
 
 impl RenderStats {
+    /// Names of the phases of `phase_ns`, in order.
     pub const PHASES: [&'static str; 4] = ["primary", "shade", "shadow", "secondary"];
 }
 
