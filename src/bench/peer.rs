@@ -31,7 +31,7 @@ pub struct PeerReport {
     pub version: String,
     /// Triangles after subdivision (the `mesh` line), if printed.
     pub triangles: Option<usize>,
-    /// The `camera` line's label, before its `:` (`canonical` or `framed`).
+    /// The `camera` line after `camera ` and up to its first `:`.
     pub camera: String,
     /// Build time in ms, wall best.
     pub build_best_ms: Option<f64>,
@@ -41,7 +41,7 @@ pub struct PeerReport {
     pub kernels: Vec<PeerKernel>,
     /// Primary rays that hit.
     pub primary_hits: Option<usize>,
-    /// The `mismatches` figure of the `primary hits` line (the peer's own cross-check).
+    /// The `mismatches` count printed on the `primary hits` line.
     pub mismatches: Option<usize>,
     /// Shadow rays that are occluded.
     pub occluded: Option<usize>,
