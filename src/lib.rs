@@ -19,11 +19,8 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-// Being rewritten (wide BVH, new engines); documented with that work.
-#[allow(missing_docs)]
 pub mod accel;
 pub mod api;
-#[allow(missing_docs)]
 pub mod bench;
 pub mod camera;
 pub mod error;

@@ -24,9 +24,13 @@ use std::time::{Duration, Instant};
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub struct Node {
+    /// Minimum corner of the box, padded outward by [`BOX_PAD`] (relative) plus `f32::MIN_POSITIVE`.
     pub min: [f32; 3],
+    /// Triangles in the leaf; 0 marks an interior node.
     pub count: u32,
+    /// Maximum corner of the box, padded like `min`.
     pub max: [f32; 3],
+    /// Interior: index of the left child (the right is `first + 1`). Leaf: first SoA slot.
     pub first: u32,
 }
 
@@ -39,21 +43,26 @@ pub enum BuildQuality {
     /// users compare with Embree's MEDIUM.
     #[default]
     Fast,
+    /// obvhs `medium_build`.
     Medium,
+    /// obvhs `slow_build` without its spatial pre-splits, so each triangle stays in one leaf.
     Slow,
 }
 
 /// Everything traversal needs: nodes (root at 0) and the triangles in leaf order.
 #[derive(Clone, Debug, Default)]
 pub struct Accel {
+    /// The BVH2, root at index 0; empty when built over no triangles.
     pub nodes: Vec<Node>,
+    /// The triangles in leaf order; `tris.prim` maps a slot back to its input index.
     pub tris: TriangleSoa,
     /// Deepest root-to-leaf path (sizes traversal stacks).
     pub depth: usize,
     /// The same tree collapsed to 8-wide nodes with SoA triangle blocks (`wide.rs`).
     pub wide: Bvh8,
-    /// The whole build, and of that the 8-wide collapse.
+    /// Wall time of the whole build (BVH2, flattening, SoA, collapse).
     pub build_time: Duration,
+    /// Wall time of the 8-wide collapse alone (part of `build_time`).
     pub collapse_time: Duration,
 }
 

@@ -21,12 +21,16 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
 /// computed once per ray rather than once per triangle.
 #[derive(Clone, Copy, Debug)]
 pub struct Ray1 {
+    /// Origin.
     pub o: [f32; 3],
+    /// Direction, as given (not normalised; `t` is in units of it).
     pub d: [f32; 3],
+    /// `|d|`.
     pub dlen: f32,
 }
 
 impl Ray1 {
+    /// The kernel's view of `ray`.
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.dir.to_array();

@@ -11,14 +11,21 @@ use glam::Vec3;
 /// `prim[slot]` is the triangle's index in the scene's original order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleSoa {
+    /// First vertex, per component (`v0[k][slot]`).
     pub v0: [Vec<f32>; 3],
+    /// Second vertex, per component.
     pub v1: [Vec<f32>; 3],
+    /// Third vertex, per component.
     pub v2: [Vec<f32>; 3],
+    /// Unnormalised normal `cross(v1 - v0, v2 - v0)`; 0 for a degenerate triangle.
     pub n: [Vec<f32>; 3],
+    /// `cross(e2, n) / <n, n>`: `<w, p1>` is the barycentric weight of `v1`; 0 if degenerate.
     pub p1: [Vec<f32>; 3],
+    /// `cross(n, e1) / <n, n>`: `<w, p2>` is the barycentric weight of `v2`; 0 if degenerate.
     pub p2: [Vec<f32>; 3],
     /// `|n|`, to scale the barycentric safety margin by how grazing a ray is.
     pub n_len: Vec<f32>,
+    /// Index of the triangle at each slot in the scene's original order.
     pub prim: Vec<u32>,
 }
 
@@ -63,34 +70,42 @@ impl TriangleSoa {
         s
     }
 
+    /// Number of triangles (slots).
     pub fn len(&self) -> usize {
         self.prim.len()
     }
 
+    /// Whether there are no triangles.
     pub fn is_empty(&self) -> bool {
         self.prim.is_empty()
     }
 
+    /// First vertex of slot `i`, gathered from the SoA arrays.
     #[inline(always)]
     pub fn v0(&self, i: usize) -> [f32; 3] {
         [self.v0[0][i], self.v0[1][i], self.v0[2][i]]
     }
+    /// Second vertex of slot `i`, gathered from the SoA arrays.
     #[inline(always)]
     pub fn v1(&self, i: usize) -> [f32; 3] {
         [self.v1[0][i], self.v1[1][i], self.v1[2][i]]
     }
+    /// Third vertex of slot `i`, gathered from the SoA arrays.
     #[inline(always)]
     pub fn v2(&self, i: usize) -> [f32; 3] {
         [self.v2[0][i], self.v2[1][i], self.v2[2][i]]
     }
+    /// Unnormalised normal of slot `i`, gathered from the SoA arrays.
     #[inline(always)]
     pub fn n(&self, i: usize) -> [f32; 3] {
         [self.n[0][i], self.n[1][i], self.n[2][i]]
     }
+    /// Barycentric form `p1` of slot `i`, gathered from the SoA arrays.
     #[inline(always)]
     pub fn p1(&self, i: usize) -> [f32; 3] {
         [self.p1[0][i], self.p1[1][i], self.p1[2][i]]
     }
+    /// Barycentric form `p2` of slot `i`, gathered from the SoA arrays.
     #[inline(always)]
     pub fn p2(&self, i: usize) -> [f32; 3] {
         [self.p2[0][i], self.p2[1][i], self.p2[2][i]]

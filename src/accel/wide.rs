@@ -43,9 +43,14 @@ pub fn leaf_blocks(r: u32) -> (usize, usize) {
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub struct Node8 {
+    /// Minimum corner of each child's box, SoA: lane `i` is child `i` (0 in unused slots).
     pub min: [F32x8; 3],
+    /// Maximum corner of each child's box, SoA like `min`.
     pub max: [F32x8; 3],
+    /// Reference per slot: a `nodes` index, or a leaf with [`LEAF_BIT`] set (see [`leaf_blocks`]).
     pub child: [u32; BLOCK],
+    /// Per octant (bit `k` set: direction component `k` negative), 8 slot indices of 3 bits,
+    /// nearest first, unused slots last; bits 24..32 of `order[0]` are the in-use mask.
     pub order: [u32; BLOCK],
 }
 
@@ -55,10 +60,15 @@ pub struct Node8 {
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub struct TriBlock8 {
+    /// Unnormalised normal per lane (`TriangleSoa::n`; 0 in unused lanes and degenerate triangles).
     pub n: Vec3x8,
+    /// First vertex per lane.
     pub v0: Vec3x8,
+    /// Barycentric form of `v1`'s weight per lane (`TriangleSoa::p1`).
     pub p1: Vec3x8,
+    /// Barycentric form of `v2`'s weight per lane (`TriangleSoa::p2`).
     pub p2: Vec3x8,
+    /// `|n|` per lane, for the grazing margin.
     pub n_len: F32x8,
     /// Original triangle index per lane (`u32::MAX` in unused lanes).
     pub prim: [u32; BLOCK],
@@ -69,7 +79,9 @@ pub struct TriBlock8 {
 /// The wide tree: `nodes[0]` is the root (absent for an empty scene), leaves in `blocks`.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh8 {
+    /// Wide nodes, root at 0; children are referenced by index (`Node8::child`).
     pub nodes: Vec<Node8>,
+    /// Triangle blocks; a leaf is a run of consecutive blocks.
     pub blocks: Vec<TriBlock8>,
     /// Deepest root-to-leaf path in nodes (sizes traversal stacks).
     pub depth: usize,

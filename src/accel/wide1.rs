@@ -16,20 +16,28 @@ use crate::simd::{self, F32x8, M32x8, Vec3x8};
 /// A ray splatted across lanes for the wide kernels, with what the slab test needs.
 #[derive(Clone, Copy, Debug)]
 pub struct RayWide {
+    /// Origin in every lane.
     pub o: Vec3x8,
+    /// Direction in every lane (as given, not normalised).
     pub d: Vec3x8,
+    /// `|d|` in every lane, computed as `Ray1::new` does.
     pub dlen: F32x8,
+    /// [`safe_inv`] of each direction component, in every lane (never `±inf`).
     pub inv: Vec3x8,
     /// `inv[k] < 0`: the slab's near plane is `max[k]`.
     pub neg: [bool; 3],
     /// The direction's octant (bit k: component k negative), indexing `Node8::order`.
     pub octant: usize,
+    /// Origin, once (for the f64 edge test).
     pub o1: [f32; 3],
+    /// Direction, once (for the f64 edge test).
     pub d1: [f32; 3],
+    /// The ray's `tnear`: hits need `t > tnear`, boxes are entered no earlier.
     pub tnear: f32,
 }
 
 impl RayWide {
+    /// Splat `ray` and precompute its reciprocal direction, signs and octant.
     #[inline(always)]
     pub fn new(ray: &Ray) -> RayWide {
         let o1 = ray.origin.to_array();

@@ -15,12 +15,16 @@ use rayon::prelude::*;
 
 /// Rays grouped 8 consecutive per packet (the peer's `run_8`), padding lanes inactive.
 pub struct Packets {
+    /// Packet `j` holds rays `8j .. 8j + 8`.
     pub rays: Vec<RayPacket8>,
+    /// Per packet, the lanes that carry a ray (all but the last packet's padding).
     pub active: Vec<M32x8>,
+    /// Number of rays (not packets).
     pub len: usize,
 }
 
 impl Packets {
+    /// Group `rays` in order, 8 per packet.
     pub fn new(rays: &[Ray]) -> Packets {
         let (rays_, active) = rays
             .chunks(8)
@@ -37,8 +41,12 @@ impl Packets {
 /// What a pass leaves behind, per ray: the hit triangle (or `u32::MAX`) and `t`, or occlusion.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Results {
+    /// Hit triangle per ray (original index), `u32::MAX` on a miss; empty for any-hit sets.
     pub tri: Vec<u32>,
+    /// Hit distance per ray (units of the ray's `d`), `f32::INFINITY` on a miss; empty for
+    /// any-hit sets.
     pub t: Vec<f32>,
+    /// Occlusion per ray; empty for closest-hit sets.
     pub occluded: Vec<bool>,
 }
 
@@ -66,9 +74,13 @@ impl Results {
 /// writes its result arrays): per ray `(triangle, t)` or occlusion, per packet a
 /// `HitPacket8` or an occlusion bitmask; beside each, the engine's kernel.
 pub enum Out {
+    /// Single-ray closest hit: per ray `(triangle, t)`, `(u32::MAX, inf)` on a miss.
     Hits(Vec<(u32, f32)>, Intersect1),
+    /// Single-ray any hit: per ray whether it is occluded.
     Occ(Vec<bool>, Occluded1),
+    /// Packet closest hit: one `HitPacket8` per packet of [`Packets`].
     Hits8(Vec<HitPacket8>, Intersect8),
+    /// Packet any hit: per packet the occluded lanes, bit `i` for lane `i`.
     Occ8(Vec<u8>, Occluded8),
 }
 

@@ -71,7 +71,9 @@ pub struct Options {
     pub quality: Option<String>,
 }
 
+/// Cap of `whitted bench --subdivide` (levels; each multiplies the triangles by 4).
 pub const MAX_SUBDIVIDE: u32 = 6;
+/// Cap of the triangle count after subdivision (the mesh's count times `4^subdivide`).
 pub const MAX_TRIANGLES: u64 = 1 << 25;
 /// Cap of `whitted bench --width x --height` (8K is 2^25).
 pub const MAX_PIXELS: u64 = 1 << 26;

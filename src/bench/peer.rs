@@ -8,13 +8,19 @@ use std::path::{Path, PathBuf};
 /// One kernel line of rt-bench: `  {label} {rays} rays  wall best {b} med {m} | cpu best .. med ..`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PeerKernel {
+    /// The ray set traced.
     pub workload: Workload,
     /// Rays per call: 1, 8 or 16.
     pub width: u32,
+    /// Rays in the set.
     pub rays: usize,
+    /// Wall-clock rate of the best pass, Mrays/s.
     pub wall_best: f64,
+    /// Wall-clock rate of the median pass, Mrays/s.
     pub wall_median: f64,
+    /// CPU-time rate of the best pass, Mrays/s.
     pub cpu_best: f64,
+    /// CPU-time rate of the median pass, Mrays/s.
     pub cpu_median: f64,
 }
 
@@ -23,19 +29,28 @@ pub struct PeerKernel {
 pub struct PeerReport {
     /// `embree 3.13.5, device config ...` line.
     pub version: String,
+    /// Triangles after subdivision (the `mesh` line), if printed.
     pub triangles: Option<usize>,
+    /// The `camera` line after `camera ` and up to its first `:`.
     pub camera: String,
-    /// Build time in ms, wall best / median.
+    /// Build time in ms, wall best.
     pub build_best_ms: Option<f64>,
+    /// Build time in ms, wall median.
     pub build_median_ms: Option<f64>,
+    /// Kernel lines, in output order (at least one after a successful parse).
     pub kernels: Vec<PeerKernel>,
+    /// Primary rays that hit.
     pub primary_hits: Option<usize>,
+    /// The `mismatches` count printed on the `primary hits` line.
     pub mismatches: Option<usize>,
+    /// Shadow rays that are occluded.
     pub occluded: Option<usize>,
+    /// Incoherent rays that hit.
     pub incoherent_hits: Option<usize>,
 }
 
 impl PeerReport {
+    /// The kernel line for workload `w` at `width` rays per call, if the peer printed one.
     pub fn kernel(&self, w: Workload, width: u32) -> Option<&PeerKernel> {
         self.kernels
             .iter()

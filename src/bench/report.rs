@@ -6,26 +6,38 @@ use std::path::PathBuf;
 /// Everything measured on one mesh.
 #[derive(Clone, Debug)]
 pub struct Report {
+    /// The mesh file as given.
     pub mesh: PathBuf,
+    /// Midpoint subdivision levels applied.
     pub subdivide: u32,
+    /// Vertices after subdivision.
     pub vertices: usize,
+    /// Triangles after subdivision.
     pub triangles: usize,
+    /// Tracing threads (at least 1).
     pub threads: usize,
+    /// Timed passes per workload (1..=64).
     pub reps: usize,
+    /// The camera and light the workloads were generated from.
     pub framing: Framing,
+    /// Image width of the camera workloads, pixels.
     pub width: u32,
+    /// Image height of the camera workloads, pixels.
     pub height: u32,
+    /// BVH build time (seconds; the build runs on one thread).
     pub build: Timing,
     /// Bytes of the 8-wide tree and its triangle blocks.
     pub wide_bytes: usize,
     /// Of the last build, the 8-wide collapse (ms).
     pub collapse_ms: f64,
+    /// Every engine on every workload.
     pub measured: Vec<Measured>,
     /// The peer's figures, or why there are none.
     pub peer: Result<PeerReport, String>,
 }
 
 impl Report {
+    /// The measurement of engine `e` on workload `w`, if taken.
     pub fn get(&self, w: Workload, e: Engine) -> Option<&Measured> {
         self.measured
             .iter()

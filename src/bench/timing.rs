@@ -10,9 +10,13 @@ use std::time::Instant;
 /// CPU seconds (of this thread with one thread, of all the process's threads otherwise).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Timing {
+    /// Shortest wall-clock pass, seconds.
     pub wall_best: f64,
+    /// Median wall-clock pass, seconds.
     pub wall_median: f64,
+    /// Least CPU time of a pass, seconds; `None` when any pass had no CPU reading.
     pub cpu_best: Option<f64>,
+    /// Median CPU time of a pass, seconds; `None` like `cpu_best`.
     pub cpu_median: Option<f64>,
 }
 
@@ -80,10 +84,15 @@ pub fn time_reps(reps: usize, threads: usize, mut f: impl FnMut()) -> Timing {
 /// One engine on one set.
 #[derive(Clone, Debug)]
 pub struct Measured {
+    /// The ray set.
     pub workload: Workload,
+    /// The engine.
     pub engine: Engine,
+    /// Rays in the set.
     pub rays: usize,
+    /// Time per pass over the whole set.
     pub timing: Timing,
+    /// What the last pass found, per ray.
     pub results: Results,
 }
 

@@ -6,8 +6,9 @@ use crate::ray::Ray;
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Image size of the primary workload.
+/// Image width of the primary workload (pixels), the peer's default.
 pub const WIDTH: u32 = 1920;
+/// Image height of the primary workload (pixels), the peer's default.
 pub const HEIGHT: u32 = 1080;
 /// Seed of the incoherent directions (splitmix64).
 pub const SEED: u64 = 1234567;
@@ -159,11 +160,15 @@ pub fn ray_hash(rays: &[Ray]) -> u64 {
 pub struct Framing {
     /// The kitten's box (to 1e-5): eye, look-at and light are the literal constants.
     pub canonical: bool,
-    /// Bounding-box centre and half diagonal (the peer's `R`).
+    /// Bounding-box centre.
     pub center: [f64; 3],
+    /// Half the bounding box's diagonal (the peer's `R`).
     pub radius: f64,
+    /// Camera position: the canonical eye, or it moved and scaled with the box.
     pub eye: [f64; 3],
+    /// Look-at point, placed like `eye`.
     pub look: [f64; 3],
+    /// Point light L1, placed like `eye` (the shadow rays' target).
     pub light: [f64; 3],
     /// Secondary origin offset `1e-5 * 2 * R`.
     pub eps: f64,
@@ -236,15 +241,21 @@ pub fn primary_rays(fr: &Framing, w: u32, h: u32) -> Vec<Ray> {
 /// A primary hit as the secondary rays need it: the ray parameter and the geometric normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceHit {
+    /// Hit distance along the primary ray, in units of its direction.
     pub t: f32,
+    /// Geometric normal, unnormalised, as [`embree_ng`] gives it ([`secondary_rays`]
+    /// normalises it and turns it towards the viewer).
     pub ng: [f32; 3],
 }
 
 /// The three secondary sets of the peer.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Secondary {
+    /// The primary rays that hit, in block order (`tnear 0`, `tfar inf`).
     pub primary_hits: Vec<Ray>,
+    /// One ray per hit towards the light, `tfar` one ulp short of it (any hit).
     pub shadow: Vec<Ray>,
+    /// One uniform hemisphere ray per hit about the viewer-facing normal (closest hit).
     pub incoherent: Vec<Ray>,
 }
 
@@ -298,10 +309,15 @@ pub fn secondary_rays(fr: &Framing, primary: &[Ray], hits: &[Option<SurfaceHit>]
 /// All four workloads of one mesh.
 #[derive(Clone, Debug)]
 pub struct Workloads {
+    /// Camera, light and offset the sets were made with.
     pub framing: Framing,
+    /// Image width of the primary rays, pixels.
     pub width: u32,
+    /// Image height of the primary rays, pixels.
     pub height: u32,
+    /// One ray per pixel centre, in 4x4 blocks ([`primary_rays`]).
     pub primary: Vec<Ray>,
+    /// The sets made from the primary hits ([`secondary_rays`]).
     pub secondary: Secondary,
 }
 
@@ -330,7 +346,7 @@ impl Workloads {
         }
     }
 
-    /// `(name, rays, any-hit)` in the peer's order.
+    /// `(workload, rays)` in the peer's order (see [`Workload::any_hit`] for the query).
     pub fn sets(&self) -> [(Workload, &[Ray]); 4] {
         [
             (Workload::Primary, &self.primary),
@@ -344,13 +360,18 @@ impl Workloads {
 /// The four ray sets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Workload {
+    /// Pixel-centre camera rays (`primary`), closest hit.
     Primary,
+    /// The primary rays that hit (`primary-hits-only`), closest hit.
     PrimaryHits,
+    /// Rays from the primary hits towards the light (`shadow`), any hit.
     Shadow,
+    /// Hemisphere rays from the primary hits (`incoherent`), closest hit.
     Incoherent,
 }
 
 impl Workload {
+    /// Every workload, in the peer's order.
     pub const ALL: [Workload; 4] = [
         Workload::Primary,
         Workload::PrimaryHits,
@@ -368,6 +389,7 @@ impl Workload {
         }
     }
 
+    /// The workload whose [`name`](Workload::name) is `s` exactly, if any.
     pub fn from_name(s: &str) -> Option<Workload> {
         Workload::ALL.into_iter().find(|w| w.name() == s)
     }
