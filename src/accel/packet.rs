@@ -4,7 +4,9 @@
 //! same arithmetic per lane (so each lane equals the scalar result bit for bit), plus an
 //! `active` mask: inactive and padding lanes never produce hits.
 
+use super::hybrid8::hand_off;
 use super::scalar::{BARY_SAFE, inside_f64};
+use super::wide::NO_ENTRY;
 use super::{Accel, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
@@ -99,9 +101,14 @@ pub(super) fn hit_box8(
 }
 
 /// One traversal for closest hit and any hit (`ANY_HIT`: a lane retires at its first hit and
-/// the walk stops when no lane is left).
+/// the walk stops when no lane is left), shared by the packet and hybrid engines. Each visited
+/// node carries `here`, the lanes whose ray meets its box (a child's box lies inside its
+/// parent's, and the slab test rounds monotonically, so no other lane can meet anything
+/// below); leaves test only those. With `SWITCH > 0` (hybrid), a node reached by at most
+/// `SWITCH` lanes that has a twin in the wide tree is handed to single-ray traversal lane by
+/// lane (`hybrid8::hand_off`); `SWITCH = 0` is the plain packet engine.
 #[inline(always)]
-fn traverse8<const ANY_HIT: bool>(
+pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
     accel: &Accel,
     rays: &RayPacket8,
     mut active: M32x8,
@@ -121,24 +128,46 @@ fn traverse8<const ANY_HIT: bool>(
     let mut tfar = rays.tfar;
     let dlen = simd::sqrt(rays.d.dot(rays.d));
     let mut stack: super::scalar::Stack<u32, 64> = super::scalar::Stack::new();
+    let mut lanes = None;
     let mut node = 0u32;
+    let boxes = |n: u32, tfar: F32x8, m: M32x8| {
+        hit_box8(&accel.nodes[n as usize], &rays.o, &inv, rays.tnear, tfar, m)
+    };
     // The root must be hit by some lane.
-    let (m, _) = hit_box8(&accel.nodes[0], &rays.o, &inv, rays.tnear, tfar, active);
-    if simd::none(m) {
+    let (mut here, _) = boxes(0, tfar, active);
+    if simd::none(here) {
         return (hits, occluded);
     }
     loop {
+        let entry = if SWITCH > 0 {
+            accel.wide.entry[node as usize]
+        } else {
+            NO_ENTRY
+        };
         let n = accel.nodes[node as usize];
-        if n.count > 0 {
+        if entry != NO_ENTRY && simd::bitmask(here).count_ones() <= SWITCH {
+            // switch: the few lanes here walk this subtree's wide twin one by one.
+            let occ = hand_off::<ANY_HIT>(
+                accel, rays, &mut lanes, here, entry, cull, &mut hits, &mut tfar,
+            );
+            if ANY_HIT {
+                occluded |= occ;
+                active = simd::and_not(active, occ);
+                if simd::none(active) {
+                    return (hits, occluded);
+                }
+            }
+        } else if n.count > 0 {
             for slot in n.first..n.first + n.count {
                 let slot = slot as usize;
-                let (mask, t, b1, b2) = hit_triangle8(accel, slot, rays, dlen, tfar, active, cull);
+                let (mask, t, b1, b2) = hit_triangle8(accel, slot, rays, dlen, tfar, here, cull);
                 if simd::none(mask) {
                     continue;
                 }
                 if ANY_HIT {
                     occluded |= mask;
                     active = simd::and_not(active, mask);
+                    here = simd::and_not(here, mask);
                     if simd::none(active) {
                         return (hits, occluded);
                     }
@@ -157,40 +186,27 @@ fn traverse8<const ANY_HIT: bool>(
                 tfar = simd::select(take, next_up, tfar);
             }
         } else {
-            // ordered children: both boxes tested, the side nearer for most lanes first.
+            // ordered children: both boxes tested for the lanes here, the side nearer for
+            // most lanes first.
             let (l, r) = (n.first, n.first + 1);
-            let (ml, tl) = hit_box8(
-                &accel.nodes[l as usize],
-                &rays.o,
-                &inv,
-                rays.tnear,
-                tfar,
-                active,
-            );
-            let (mr, tr) = hit_box8(
-                &accel.nodes[r as usize],
-                &rays.o,
-                &inv,
-                rays.tnear,
-                tfar,
-                active,
-            );
+            let (ml, tl) = boxes(l, tfar, here);
+            let (mr, tr) = boxes(r, tfar, here);
             match (simd::any(ml), simd::any(mr)) {
                 (true, true) => {
                     let both = ml & mr;
                     let left_first = simd::bitmask(both & simd::le(tl, tr)).count_ones() * 2
                         >= simd::bitmask(both).count_ones();
-                    let (near, far) = if left_first { (l, r) } else { (r, l) };
+                    let (near, far, m) = if left_first { (l, r, ml) } else { (r, l, mr) };
                     stack.push(far);
-                    node = near;
+                    (node, here) = (near, m);
                     continue;
                 }
                 (true, false) => {
-                    node = l;
+                    (node, here) = (l, ml);
                     continue;
                 }
                 (false, true) => {
-                    node = r;
+                    (node, here) = (r, mr);
                     continue;
                 }
                 (false, false) => {}
@@ -198,22 +214,13 @@ fn traverse8<const ANY_HIT: bool>(
         }
         // pop the next node some lane still reaches before its closest hit.
         loop {
-            match stack.pop() {
-                None => return (hits, occluded),
-                Some(next) => {
-                    let (m, _) = hit_box8(
-                        &accel.nodes[next as usize],
-                        &rays.o,
-                        &inv,
-                        rays.tnear,
-                        tfar,
-                        active,
-                    );
-                    if simd::any(m) {
-                        node = next;
-                        break;
-                    }
-                }
+            let Some(next) = stack.pop() else {
+                return (hits, occluded);
+            };
+            let (m, _) = boxes(next, tfar, active);
+            if simd::any(m) {
+                (node, here) = (next, m);
+                break;
             }
         }
     }
@@ -221,12 +228,12 @@ fn traverse8<const ANY_HIT: bool>(
 
 /// Closest hits of the `active` lanes (others report no hit).
 pub fn intersect8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
-    traverse8::<false>(accel, rays, active, cull).0
+    traverse8::<false, 0>(accel, rays, active, cull).0
 }
 
 /// Lanes of `active` whose ray hits anything with `tnear < t < tfar`.
 pub fn occluded8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> M32x8 {
-    traverse8::<true>(accel, rays, active, cull).1
+    traverse8::<true, 0>(accel, rays, active, cull).1
 }
 
 /// Hit of lane `i` as the scalar API reports it (for tests and tools).
