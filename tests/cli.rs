@@ -1,5 +1,7 @@
 //! The `whitted` binary end to end: render, scene, trace-rays, and errors with exit code 2.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -124,7 +126,7 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
     let bad = tmp("bad.toml");
     std::fs::write(&bad, "[image]\nwidth = 4\nheight = 3\nbogus = 1\n").unwrap();
     let trap = tmp("trap.toml");
-    std::fs::write(&trap, TRAP).unwrap();
+    std::fs::write(&trap, common::TRAP).unwrap();
     let mut cases: Vec<(Vec<String>, &str)> = vec![
         (
             vec!["render".into(), bad.display().to_string(), "-q".into()],
@@ -202,38 +204,6 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
         );
     }
 }
-
-/// A camera inside a closed cube whose walls reflect and refract (`ks = kt = 0.5`), culling
-/// off, depth 64.
-const TRAP: &str = r#"
-[image]
-width = 32
-height = 24
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, -1]
-vfov = 60
-[render]
-depth = 64
-cull_backfaces = false
-[background]
-color = [0.1, 0.2, 0.3]
-[[light]]
-position = [0.2, 0.3, 0.1]
-intensity = [1, 1, 1]
-[[material]]
-name = "glassmirror"
-color = [0.8, 0.8, 0.8]
-ka = 0.1
-kd = 0.2
-ks = 0.5
-kt = 0.5
-ior = 1.5
-n = 20
-[[mesh]]
-material = "glassmirror"
-shape = "cube"
-"#;
 
 /// Deep recursion is fine where rays escape: the demo's glass ball and mirror at depth 64
 /// render (the ray-tree budget only stops trapped rays).

@@ -556,7 +556,7 @@ fn a_failed_render_leaves_the_old_image_and_no_temporary_file() {
     let dir = tmp("atomic");
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("trap.toml");
-    std::fs::write(&scene, TRAP).unwrap();
+    std::fs::write(&scene, common::TRAP).unwrap();
     for ext in ["exr", "png"] {
         let out = dir.join(format!("keep.{ext}"));
         run(&[
@@ -588,38 +588,6 @@ fn a_failed_render_leaves_the_old_image_and_no_temporary_file() {
     names.sort();
     assert_eq!(names, ["keep.exr", "keep.png", "trap.toml"]);
 }
-
-/// A camera inside a closed cube whose walls reflect and refract: every sample's ray tree
-/// passes the budget (see tests/cli.rs).
-const TRAP: &str = r#"
-[image]
-width = 32
-height = 24
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, -1]
-vfov = 60
-[render]
-depth = 64
-cull_backfaces = false
-[background]
-color = [0.1, 0.2, 0.3]
-[[light]]
-position = [0.2, 0.3, 0.1]
-intensity = [1, 1, 1]
-[[material]]
-name = "glassmirror"
-color = [0.8, 0.8, 0.8]
-ka = 0.1
-kd = 0.2
-ks = 0.5
-kt = 0.5
-ior = 1.5
-n = 20
-[[mesh]]
-material = "glassmirror"
-shape = "cube"
-"#;
 
 /// `--subdivide` is checked against the scene's triangle cap before any mesh is subdivided:
 /// level 6 of the kitten (84M triangles) is refused at once.

@@ -36,3 +36,35 @@ pub fn settings(stage: Option<Stage>) -> Settings {
         ..Settings::default()
     }
 }
+
+/// A camera inside a closed cube whose walls both reflect and refract (`ks = kt = 0.5`),
+/// culling off, depth 64: every sample's ray tree passes the budget.
+pub const TRAP: &str = r#"
+[image]
+width = 32
+height = 24
+[camera]
+eye = [0, 0, 0]
+look_at = [0, 0, -1]
+vfov = 60
+[render]
+depth = 64
+cull_backfaces = false
+[background]
+color = [0.1, 0.2, 0.3]
+[[light]]
+position = [0.2, 0.3, 0.1]
+intensity = [1, 1, 1]
+[[material]]
+name = "glassmirror"
+color = [0.8, 0.8, 0.8]
+ka = 0.1
+kd = 0.2
+ks = 0.5
+kt = 0.5
+ior = 1.5
+n = 20
+[[mesh]]
+material = "glassmirror"
+shape = "cube"
+"#;
