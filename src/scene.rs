@@ -23,17 +23,45 @@ pub enum Albedo {
     Texture(Arc<Texture>),
 }
 
-/// Whitted material: `ka kd ks n kt ior` and the colour source.
+/// Whitted material: the colour source `Od`, RGB coefficients `ka kd ks kt`, the Phong
+/// exponent `n`, the index of refraction and an emitted colour `ke`.
+///
+/// A scalar coefficient of a scene file is the same value in all three channels, which
+/// computes exactly what the scalar model computed (`x * k` per channel).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
     pub albedo: Albedo,
-    pub ka: f32,
-    pub kd: f32,
-    pub ks: f32,
+    pub ka: Vec3,
+    pub kd: Vec3,
+    pub ks: Vec3,
     pub n: f32,
-    pub kt: f32,
+    pub kt: Vec3,
     pub ior: f32,
+    /// Weight of the reflection ray (`ks` unless the scene or an MTL file separates them).
+    pub kr: Vec3,
+    /// Emitted colour, added to the local term (`0` for everything but lamps).
+    pub ke: Vec3,
+    /// Whether the emission also lights the scene through point lights.
+    pub lamp: bool,
+}
+
+impl Material {
+    /// Whether reflection rays are traced from this material (some channel of `kr` > 0).
+    #[inline]
+    pub fn reflects(&self) -> bool {
+        self.kr.max_element() > 0.0
+    }
+    /// Whether refraction rays are traced from this material (some channel of `kt` > 0).
+    #[inline]
+    pub fn refracts(&self) -> bool {
+        self.kt.max_element() > 0.0
+    }
+    /// Whether the material emits light (some channel of `ke` > 0).
+    #[inline]
+    pub fn emits(&self) -> bool {
+        self.ke.max_element() > 0.0
+    }
 }
 
 /// What a ray that hits nothing sees.
@@ -57,7 +85,10 @@ impl Background {
 pub struct Object {
     pub name: String,
     pub mesh: Mesh,
+    /// The scene material of every triangle, unless `face_materials` is given.
     pub material: usize,
+    /// A scene material per triangle (meshes that bring their own materials, e.g. OBJ + MTL).
+    pub face_materials: Option<Vec<u32>>,
 }
 
 /// Camera placement as written in a scene (the image size is separate so it can be overridden).
@@ -121,6 +152,12 @@ impl Scene {
                 .extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
             g.tri_object
                 .extend(std::iter::repeat_n(oi as u32, m.triangles.len()));
+            match &o.face_materials {
+                Some(f) => g.tri_material.extend_from_slice(f),
+                None => g
+                    .tri_material
+                    .extend(std::iter::repeat_n(o.material as u32, m.triangles.len())),
+            }
         }
         g.face_normals = (0..g.triangles.len() as u32)
             .map(|t| {
@@ -142,6 +179,8 @@ pub struct Geometry {
     pub colors: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     pub tri_object: Vec<u32>,
+    /// Scene material index per triangle.
+    pub tri_material: Vec<u32>,
     /// Unit geometric normal `normalize(cross(v1 - v0, v2 - v0))` per triangle (0 if degenerate).
     pub face_normals: Vec<Vec3>,
 }

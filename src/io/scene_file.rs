@@ -126,6 +126,9 @@ fn default_depth() -> u32 {
 fn default_true() -> bool {
     true
 }
+fn is_true(v: &bool) -> bool {
+    *v
+}
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -167,18 +170,105 @@ pub struct MaterialDesc {
     pub texture: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checker: Option<CheckerDesc>,
-    pub ka: f32,
-    pub kd: f32,
-    pub ks: f32,
+    /// Coefficients: a number (the same in every channel) or `[r, g, b]`.
+    pub ka: Coef,
+    pub kd: Coef,
+    pub ks: Coef,
     pub n: f32,
-    #[serde(default)]
-    pub kt: f32,
+    #[serde(default, skip_serializing_if = "Coef::is_zero")]
+    pub kt: Coef,
     #[serde(default = "default_ior")]
     pub ior: f32,
+    /// Weight of the reflection ray; omitted = `ks` (Whitted's one coefficient for both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kr: Option<Coef>,
+    /// Emitted colour: shown on the surface and, with `lamp` (default true), point lights.
+    #[serde(default, skip_serializing_if = "Coef::is_zero")]
+    pub ke: Coef,
+    #[serde(default = "default_true", skip_serializing_if = "is_true")]
+    pub lamp: bool,
 }
 
 fn default_ior() -> f32 {
     1.5
+}
+
+/// A material coefficient: one number for all three channels, or an RGB triple.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Coef {
+    Scalar(f32),
+    Rgb([f32; 3]),
+}
+
+impl Default for Coef {
+    fn default() -> Self {
+        Coef::Scalar(0.0)
+    }
+}
+
+impl From<f32> for Coef {
+    fn from(v: f32) -> Self {
+        Coef::Scalar(v)
+    }
+}
+
+impl Coef {
+    pub fn rgb(self) -> [f32; 3] {
+        match self {
+            Coef::Scalar(v) => [v; 3],
+            Coef::Rgb(c) => c,
+        }
+    }
+    pub fn is_zero(&self) -> bool {
+        self.rgb() == [0.0; 3]
+    }
+}
+
+impl Serialize for Coef {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Coef::Scalar(v) => s.serialize_f32(*v),
+            Coef::Rgb(c) => c.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Coef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Coef;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an array of 3 numbers [r, g, b]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Coef, E> {
+                Ok(Coef::Scalar(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Coef, E> {
+                Ok(Coef::Scalar(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Coef, E> {
+                Ok(Coef::Scalar(v as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<Coef, A::Error> {
+                let mut c = Vec::new();
+                while let Some(x) = seq.next_element::<f32>()? {
+                    if c.len() == 3 {
+                        return Err(serde::de::Error::invalid_length(4, &self));
+                    }
+                    c.push(x);
+                }
+                let n = c.len();
+                c.try_into()
+                    .map(Coef::Rgb)
+                    .map_err(|_| serde::de::Error::invalid_length(n, &self))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// A procedural checker texture: `squares x squares` cells alternating `a` and `b` (linear RGB).
@@ -539,15 +629,24 @@ pub fn build_scene(
                 format!("{}: must be a finite number > 0, found {ior}", key("ior")),
             ));
         }
+        let coef = |c: Coef, k: &str| match c {
+            Coef::Scalar(v) => nonneg(v, &key(k), path).map(Vec3::splat),
+            Coef::Rgb(v) => nonneg3(v, &key(k), path),
+        };
+        let ks = coef(m.ks, "ks")?;
+        let ke = coef(m.ke, "ke")?;
         materials.push(Material {
             name: m.name.clone(),
             albedo,
-            ka: nonneg(m.ka, &key("ka"), path)?,
-            kd: nonneg(m.kd, &key("kd"), path)?,
-            ks: nonneg(m.ks, &key("ks"), path)?,
+            ka: coef(m.ka, "ka")?,
+            kd: coef(m.kd, "kd")?,
+            ks,
             n: nonneg(m.n, &key("n"), path)?,
-            kt: nonneg(m.kt, &key("kt"), path)?,
+            kt: coef(m.kt, "kt")?,
             ior,
+            kr: m.kr.map_or(Ok(ks), |c| coef(c, "kr"))?,
+            ke,
+            lamp: m.lamp && ke.max_element() > 0.0,
         });
     }
 
@@ -646,6 +745,7 @@ pub fn build_scene(
             name,
             mesh,
             material,
+            face_materials: None,
         });
     }
 
