@@ -25,9 +25,9 @@ enum Command {
     /// Render a built-in scene (phong, vertex_color, texture, cubemap, refraction, demo) or a
     /// scene file; with no scene, the demo (needs no files).
     Render(RenderArgs),
-    /// Print a built-in scene as an editable TOML file.
+    /// Print a built-in scene, or the scene `render` gives a mesh file, as editable TOML.
     Scene {
-        /// phong, vertex_color, texture, cubemap, refraction or demo.
+        /// phong, vertex_color, texture, cubemap, refraction, demo, or a .obj/.ply/.m file.
         name: String,
     },
     /// Describe a mesh, scene, image or cube-map folder after validating it.
@@ -68,7 +68,8 @@ struct TraceArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Built-in scene name or path to a `.toml` scene file.
+    /// Built-in scene name, a `.toml` scene file, or a mesh (`.obj`, `.ply`, `.m`) to render
+    /// alone (framed from the canonical direction, canonical lights or its emitters).
     scene: Option<String>,
     /// Render one stage of the assignment: intersection, diffuse, specular, shadow, reflection.
     #[arg(long)]
@@ -206,6 +207,17 @@ fn load_scene_file(arg: &str) -> Result<(SceneFile, PathBuf, Option<PathBuf>)> {
 }
 
 fn cmd_scene(name: &str) -> Result<()> {
+    if whitted::io::mesh_scene::is_mesh_file(Path::new(name)) {
+        let (s, warnings) = whitted::io::mesh_scene::scene_for_mesh(Path::new(name), 1024, 768)?;
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
+        print!(
+            "# whitted scene for the mesh '{name}': `whitted render {name}` renders this.\n# Lights: the canonical ones scaled to the model, or none when its materials emit\n# (emitters light the scene themselves). Materials: the file's, mapped from MTL.\n{}",
+            s.to_toml()
+        );
+        return Ok(());
+    }
     let s = scenes::builtin(name).ok_or_else(|| {
         Error::Usage(format!(
             "no built-in scene '{name}' (try {})",
@@ -221,7 +233,15 @@ fn cmd_scene(name: &str) -> Result<()> {
 
 fn cmd_render(args: RenderArgs) -> Result<()> {
     let name = args.scene.clone().unwrap_or_else(|| "demo".into());
-    let (mut file, path, dir) = load_scene_file(&name)?;
+    let (mut file, path, dir) = if whitted::io::mesh_scene::is_mesh_file(Path::new(&name)) {
+        // A mesh alone: framed for the requested size; build_scene reports the warnings.
+        let size = (args.width.unwrap_or(1024), args.height.unwrap_or(768));
+        check_size(size.0, size.1).map_err(Error::Usage)?;
+        let (file, _) = whitted::io::mesh_scene::scene_for_mesh(Path::new(&name), size.0, size.1)?;
+        (file, PathBuf::from(&name), None)
+    } else {
+        load_scene_file(&name)?
+    };
     if let Some(w) = args.width {
         file.image.width = w;
     }

@@ -169,6 +169,102 @@ impl Scene {
     }
 }
 
+/// Point lights standing in for the emitting surfaces (materials with `ke > 0` and `lamp`).
+///
+/// The triangles of each emitting material are grouped by the major axis and sign of their
+/// normal (a flat lamp is one group, a lamp box up to six). Each group gives one light: at
+/// its area-weighted centroid, moved along the group's mean normal just past its frontmost
+/// vertex (by `1e-3` of the scene's bounding-box diagonal), so the lamp's own triangles lie
+/// behind it and do not shadow it. Intensities are `ke` times the group's area, scaled so
+/// that the brightest channel of all emitter lights together is 1 (point lights have no
+/// fall-off here, so only the ratios of `Ke` and area matter; the total matches one
+/// canonical key light). The emitting surfaces themselves show `ke` as given.
+pub fn emitter_lights(objects: &[Object], materials: &[Material]) -> Vec<Light> {
+    #[derive(Clone, Copy, Default)]
+    struct Group {
+        area: f32,
+        centroid: Vec3,
+        normal: Vec3,
+    }
+    let lamps: Vec<usize> = (0..materials.len())
+        .filter(|&m| materials[m].lamp && materials[m].emits())
+        .collect();
+    if lamps.is_empty() {
+        return Vec::new();
+    }
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for o in objects {
+        if let Some((a, b)) = o.mesh.bounds() {
+            (lo, hi) = (lo.min(a), hi.max(b));
+        }
+    }
+    let margin = 1e-3 * (hi - lo).length();
+    let material_of = |o: &Object, t: usize| {
+        o.face_materials
+            .as_ref()
+            .map_or(o.material, |f| f[t] as usize)
+    };
+    let bin = |n: Vec3| {
+        let a = n.abs();
+        let axis = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        axis * 2 + (n[axis] < 0.0) as usize
+    };
+    let mut lights: Vec<(Vec3, Vec3)> = Vec::new();
+    for &lamp in &lamps {
+        let mut groups = [Group::default(); 6];
+        for o in objects {
+            for t in (0..o.mesh.triangles.len()).filter(|&t| material_of(o, t) == lamp) {
+                let c = o.mesh.face_cross(t);
+                let area = 0.5 * c.length();
+                if !(area > 0.0) {
+                    continue;
+                }
+                let g = &mut groups[bin(c)];
+                let [a, b, d] = o.mesh.triangles[t].map(|i| o.mesh.positions[i as usize]);
+                g.area += area;
+                g.centroid += area * (a + b + d) / 3.0;
+                g.normal += c;
+            }
+        }
+        for (k, g) in groups.iter().enumerate() {
+            if !(g.area > 0.0) {
+                continue;
+            }
+            let centroid = g.centroid / g.area;
+            let n = g.normal.try_normalize().unwrap_or(Vec3::AXES[k / 2]);
+            // Past the frontmost vertex of the group along n.
+            let mut front = 0.0f32;
+            for o in objects {
+                for t in (0..o.mesh.triangles.len()).filter(|&t| material_of(o, t) == lamp) {
+                    if bin(o.mesh.face_cross(t)) != k {
+                        continue;
+                    }
+                    for &i in &o.mesh.triangles[t] {
+                        front = front.max((o.mesh.positions[i as usize] - centroid).dot(n));
+                    }
+                }
+            }
+            let position = centroid + n * (front + margin);
+            lights.push((position, materials[lamp].ke * g.area));
+        }
+    }
+    let total = lights.iter().fold(Vec3::ZERO, |s, l| s + l.1).max_element();
+    lights
+        .into_iter()
+        .filter(|_| total > 0.0 && total.is_finite())
+        .map(|(position, power)| Light {
+            position,
+            intensity: power / total,
+        })
+        .collect()
+}
+
 /// All triangles of a scene in one list (the order of objects, then of each mesh's faces),
 /// with per-vertex normals, uvs and colours for shading.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -2,7 +2,9 @@
 
 pub mod fuzz;
 pub mod image;
+pub mod mesh_scene;
 pub mod mfile;
+pub mod mtl;
 pub mod obj;
 pub mod rays;
 pub mod scene_file;
@@ -33,6 +35,25 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
     }
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
+
+/// Load a mesh with the materials its file brings (OBJ: `mtllib`), by extension.
+pub fn load_model(path: &Path) -> Result<(obj::Model, Vec<String>)> {
+    match extension(path).as_str() {
+        "obj" => obj::load_obj_model(path),
+        _ => load_mesh(path).map(|(mesh, w)| {
+            (
+                obj::Model {
+                    mesh,
+                    ..Default::default()
+                },
+                w,
+            )
+        }),
+    }
+}
+
+/// The mesh formats [`load_mesh`] reads, by extension.
+pub const MESH_EXTENSIONS: [&str; 2] = ["m", "obj"];
 
 /// Load a mesh by extension (`.m` or `.obj`); warnings are returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {

@@ -5,7 +5,8 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{load_cubemap, load_texture};
-use crate::io::load_mesh;
+use crate::io::load_model;
+use crate::io::obj::{Model, NO_MATERIAL};
 use crate::mesh::Mesh;
 use crate::scene::{Albedo, Background, Light, Material, Object, Scene, View, shapes};
 use crate::texture::Texture;
@@ -287,6 +288,10 @@ pub struct CheckerDesc {
 pub struct MeshDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
+    /// The scene material of the whole mesh. Omitted (files only): the file's own materials
+    /// (OBJ `mtllib`/`usemtl`), each replaced by a scene material of the same name if there
+    /// is one, and [`DEFAULT_MATERIAL`] for faces without one.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub material: String,
     /// A `.m` or `.obj` file ...
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -572,101 +577,48 @@ pub fn build_scene(
         ));
     }
     for (i, m) in file.materials.iter().enumerate() {
-        let key = |k: &str| format!("material[{i}] '{}'.{k}", m.name);
         if materials.iter().any(|x: &Material| x.name == m.name) {
             return Err(Error::scene(
                 path,
                 format!("material '{}' is defined twice", m.name),
             ));
         }
-        let sources = m.color.is_some() as u32
-            + m.vertex_color as u32
-            + m.texture.is_some() as u32
-            + m.checker.is_some() as u32;
-        if sources != 1 {
-            return Err(Error::scene(
-                path,
-                format!(
-                    "{}: give exactly one of color, vertex_color, texture, checker",
-                    key("color")
-                ),
-            ));
-        }
-        let albedo = if let Some(col) = m.color {
-            Albedo::Color(nonneg3(col, &key("color"), path)?)
-        } else if m.vertex_color {
-            Albedo::VertexColor
-        } else if let Some(t) = &m.texture {
-            let file = search.resolve(t, path)?;
-            match textures.iter().find(|(p, _)| *p == file) {
-                Some((_, tex)) => Albedo::Texture(tex.clone()),
-                None => {
-                    let tex = Arc::new(load_texture(&file)?);
-                    textures.push((file, tex.clone()));
-                    Albedo::Texture(tex)
-                }
-            }
-        } else {
-            let ch = m.checker.as_ref().expect("one source");
-            if !(1..=4096).contains(&ch.squares) {
-                return Err(Error::scene(
-                    path,
-                    format!("{}: squares must be in 1..=4096", key("checker")),
-                ));
-            }
-            let size = (ch.squares as usize * 16).min(4096);
-            Albedo::Texture(Arc::new(Texture::checker(
-                size,
-                ch.squares as usize,
-                nonneg3(ch.a, &key("checker.a"), path)?,
-                nonneg3(ch.b, &key("checker.b"), path)?,
-            )))
-        };
-        let ior = m.ior;
-        if !(ior.is_finite() && ior > 0.0) {
-            return Err(Error::scene(
-                path,
-                format!("{}: must be a finite number > 0, found {ior}", key("ior")),
-            ));
-        }
-        let coef = |c: Coef, k: &str| match c {
-            Coef::Scalar(v) => nonneg(v, &key(k), path).map(Vec3::splat),
-            Coef::Rgb(v) => nonneg3(v, &key(k), path),
-        };
-        let ks = coef(m.ks, "ks")?;
-        let ke = coef(m.ke, "ke")?;
-        materials.push(Material {
-            name: m.name.clone(),
-            albedo,
-            ka: coef(m.ka, "ka")?,
-            kd: coef(m.kd, "kd")?,
-            ks,
-            n: nonneg(m.n, &key("n"), path)?,
-            kt: coef(m.kt, "kt")?,
-            ior,
-            kr: m.kr.map_or(Ok(ks), |c| coef(c, "kr"))?,
-            ke,
-            lamp: m.lamp && ke.max_element() > 0.0,
-        });
+        let prefix = format!("material[{i}] '{}'", m.name);
+        materials.push(build_material(m, &prefix, path, search, &mut textures)?);
     }
 
     let mut objects = Vec::new();
     let mut total_triangles = 0u64;
     let mut subdivided_total = 0u64;
     // Each mesh file is read once, however many `[[mesh]]` entries name it.
-    let mut loaded: Vec<(PathBuf, Mesh)> = Vec::new();
+    let mut loaded: Vec<(PathBuf, Model)> = Vec::new();
     for (i, d) in file.meshes.iter().enumerate() {
         let key = |k: &str| format!("mesh[{i}].{k}");
-        let material = materials
-            .iter()
-            .position(|m| m.name == d.material)
-            .ok_or_else(|| {
-                Error::scene(
-                    path,
-                    format!("{}: no material named '{}'", key("material"), d.material),
-                )
-            })?;
-        let (mesh, name) = mesh_of(d, i, path, search, &mut loaded, &mut warnings)?;
+        if d.material.is_empty() && d.file.is_none() {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: required for inline and shape meshes (only files bring materials)",
+                    key("material")
+                ),
+            ));
+        }
+        let (model, name) = mesh_of(d, i, path, search, &mut loaded, &mut warnings)?;
+        let (material, face_materials) = if d.material.is_empty() {
+            file_materials(&model, &name, path, search, &mut materials, &mut textures)?
+        } else {
+            let m = materials
+                .iter()
+                .position(|m| m.name == d.material)
+                .ok_or_else(|| {
+                    Error::scene(
+                        path,
+                        format!("{}: no material named '{}'", key("material"), d.material),
+                    )
+                })?;
+            (m, None)
+        };
+        let mesh = model.mesh;
         if d.subdivide > MAX_SUBDIVIDE {
             return Err(Error::scene(
                 path,
@@ -696,6 +648,13 @@ pub fn build_scene(
         } else {
             mesh
         };
+        // Subdivision makes 4 children per face, in order.
+        let face_materials = face_materials.map(|f| {
+            let n = 1usize << (2 * d.subdivide);
+            f.iter()
+                .flat_map(|&m| std::iter::repeat_n(m, n))
+                .collect::<Vec<u32>>()
+        });
         if !mesh.positions.iter().all(|p| p.is_finite()) {
             return Err(Error::scene(
                 path,
@@ -709,28 +668,37 @@ pub fn build_scene(
                 ),
             ));
         }
-        match &materials[material].albedo {
-            Albedo::VertexColor if mesh.colors.is_none() => {
-                return Err(Error::scene(
-                    path,
-                    format!(
-                        "{}: material '{}' uses vertex colours but the mesh has no rgb",
-                        key("material"),
-                        d.material
-                    ),
-                ));
+        let mut used = vec![material as u32];
+        if let Some(f) = &face_materials {
+            used = f.clone();
+            used.sort_unstable();
+            used.dedup();
+        }
+        for &material in &used {
+            let material = &materials[material as usize];
+            match &material.albedo {
+                Albedo::VertexColor if mesh.colors.is_none() => {
+                    return Err(Error::scene(
+                        path,
+                        format!(
+                            "{}: material '{}' uses vertex colours but the mesh has no rgb",
+                            key("material"),
+                            material.name
+                        ),
+                    ));
+                }
+                Albedo::Texture(_) if mesh.uvs.is_none() => {
+                    return Err(Error::scene(
+                        path,
+                        format!(
+                            "{}: material '{}' is textured but the mesh has no uv",
+                            key("material"),
+                            material.name
+                        ),
+                    ));
+                }
+                _ => {}
             }
-            Albedo::Texture(_) if mesh.uvs.is_none() => {
-                return Err(Error::scene(
-                    path,
-                    format!(
-                        "{}: material '{}' is textured but the mesh has no uv",
-                        key("material"),
-                        d.material
-                    ),
-                ));
-            }
-            _ => {}
         }
         total_triangles += mesh.triangles.len() as u64;
         if total_triangles > MAX_SCENE_TRIANGLES {
@@ -745,9 +713,12 @@ pub fn build_scene(
             name,
             mesh,
             material,
-            face_materials: None,
+            face_materials,
         });
     }
+
+    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own.
+    lights.extend(crate::scene::emitter_lights(&objects, &materials));
 
     let scene = Scene {
         width,
@@ -769,14 +740,118 @@ pub fn build_scene(
     Ok((scene, warnings))
 }
 
+/// The material faces of a file get when they name none (or the file has no materials):
+/// grey, or the vertex colours when the file has them.
+pub const DEFAULT_MATERIAL: &str = "default";
+
+/// [`DEFAULT_MATERIAL`] as a scene material description.
+pub fn default_material(vertex_colors: bool) -> MaterialDesc {
+    MaterialDesc {
+        name: DEFAULT_MATERIAL.into(),
+        color: (!vertex_colors).then_some([0.8; 3]),
+        vertex_color: vertex_colors,
+        texture: None,
+        checker: None,
+        ka: Coef::Scalar(0.3),
+        kd: Coef::Scalar(0.7),
+        ks: Coef::Scalar(0.1),
+        n: 40.0,
+        kt: Coef::Scalar(0.0),
+        ior: 1.5,
+        kr: Some(Coef::Scalar(0.0)),
+        ke: Coef::Scalar(0.0),
+        lamp: true,
+    }
+}
+
+/// Validate one material description and load its texture (one load per file).
+fn build_material(
+    m: &MaterialDesc,
+    prefix: &str,
+    path: &Path,
+    search: &SearchPath,
+    textures: &mut Vec<(PathBuf, Arc<Texture>)>,
+) -> Result<Material> {
+    let key = |k: &str| format!("{prefix}.{k}");
+    let sources = m.color.is_some() as u32
+        + m.vertex_color as u32
+        + m.texture.is_some() as u32
+        + m.checker.is_some() as u32;
+    if sources != 1 {
+        return Err(Error::scene(
+            path,
+            format!(
+                "{}: give exactly one of color, vertex_color, texture, checker",
+                key("color")
+            ),
+        ));
+    }
+    let albedo = if let Some(col) = m.color {
+        Albedo::Color(nonneg3(col, &key("color"), path)?)
+    } else if m.vertex_color {
+        Albedo::VertexColor
+    } else if let Some(t) = &m.texture {
+        let file = search.resolve(t, path)?;
+        match textures.iter().find(|(p, _)| *p == file) {
+            Some((_, tex)) => Albedo::Texture(tex.clone()),
+            None => {
+                let tex = Arc::new(load_texture(&file)?);
+                textures.push((file, tex.clone()));
+                Albedo::Texture(tex)
+            }
+        }
+    } else {
+        let ch = m.checker.as_ref().expect("one source");
+        if !(1..=4096).contains(&ch.squares) {
+            return Err(Error::scene(
+                path,
+                format!("{}: squares must be in 1..=4096", key("checker")),
+            ));
+        }
+        let size = (ch.squares as usize * 16).min(4096);
+        Albedo::Texture(Arc::new(Texture::checker(
+            size,
+            ch.squares as usize,
+            nonneg3(ch.a, &key("checker.a"), path)?,
+            nonneg3(ch.b, &key("checker.b"), path)?,
+        )))
+    };
+    let ior = m.ior;
+    if !(ior.is_finite() && ior > 0.0) {
+        return Err(Error::scene(
+            path,
+            format!("{}: must be a finite number > 0, found {ior}", key("ior")),
+        ));
+    }
+    let coef = |c: Coef, k: &str| match c {
+        Coef::Scalar(v) => nonneg(v, &key(k), path).map(Vec3::splat),
+        Coef::Rgb(v) => nonneg3(v, &key(k), path),
+    };
+    let ks = coef(m.ks, "ks")?;
+    let ke = coef(m.ke, "ke")?;
+    Ok(Material {
+        name: m.name.clone(),
+        albedo,
+        ka: coef(m.ka, "ka")?,
+        kd: coef(m.kd, "kd")?,
+        ks,
+        n: nonneg(m.n, &key("n"), path)?,
+        kt: coef(m.kt, "kt")?,
+        ior,
+        kr: m.kr.map_or(Ok(ks), |c| coef(c, "kr"))?,
+        ke,
+        lamp: m.lamp && ke.max_element() > 0.0,
+    })
+}
+
 fn mesh_of(
     d: &MeshDesc,
     i: usize,
     path: &Path,
     search: &SearchPath,
-    loaded: &mut Vec<(PathBuf, Mesh)>,
+    loaded: &mut Vec<(PathBuf, Model)>,
     warnings: &mut Vec<String>,
-) -> Result<(Mesh, String)> {
+) -> Result<(Model, String)> {
     let key = |k: &str| format!("mesh[{i}].{k}");
     let sources = d.file.is_some() as u32 + d.vertices.is_some() as u32 + d.shape.is_some() as u32;
     if sources != 1 {
@@ -796,16 +871,16 @@ fn mesh_of(
     }
     if let Some(f) = &d.file {
         let file = search.resolve(f, path)?;
-        let mesh = match loaded.iter().find(|(p, _)| *p == file) {
+        let model = match loaded.iter().find(|(p, _)| *p == file) {
             Some((_, m)) => m.clone(),
             None => {
-                let (mesh, w) = load_mesh(&file)?;
+                let (model, w) = load_model(&file)?;
                 warnings.extend(w);
-                loaded.push((file, mesh.clone()));
-                mesh
+                loaded.push((file, model.clone()));
+                model
             }
         };
-        return Ok((mesh, d.name.clone().unwrap_or_else(|| f.clone())));
+        return Ok((model, d.name.clone().unwrap_or_else(|| f.clone())));
     }
     let name = d.name.clone().unwrap_or_else(|| format!("mesh{i}"));
     let center = finite3(d.center.unwrap_or([0.0; 3]), &key("center"), path)?;
@@ -843,7 +918,7 @@ fn mesh_of(
             ..Default::default()
         };
         mesh.ensure_normals();
-        return Ok((mesh, name));
+        return Ok((plain(mesh), name));
     }
     let shape = d.shape.as_deref().unwrap_or_default();
     let size = finite3(d.size.unwrap_or([1.0; 3]), &key("size"), path)?;
@@ -872,7 +947,61 @@ fn mesh_of(
     };
     // A zero size makes the shape's own normals 0/0: fall back to the geometric normals.
     mesh.ensure_normals();
-    Ok((mesh, name))
+    Ok((plain(mesh), name))
+}
+
+fn plain(mesh: Mesh) -> Model {
+    Model {
+        mesh,
+        ..Default::default()
+    }
+}
+
+/// Scene materials for a mesh file's own materials: a scene material of the same name if
+/// there is one, else the file's (validated and added to the scene); faces without one get
+/// [`DEFAULT_MATERIAL`] (or its vertex-colour twin when the mesh has colours). Returns the
+/// material of the whole mesh, or a material per triangle.
+fn file_materials(
+    model: &Model,
+    name: &str,
+    path: &Path,
+    search: &SearchPath,
+    materials: &mut Vec<Material>,
+    textures: &mut Vec<(PathBuf, Arc<Texture>)>,
+) -> Result<(usize, Option<Vec<u32>>)> {
+    let mut index_of = |desc: &MaterialDesc, materials: &mut Vec<Material>| -> Result<u32> {
+        if let Some(k) = materials.iter().position(|m| m.name == desc.name) {
+            return Ok(k as u32);
+        }
+        let prefix = format!("mesh '{name}' material '{}'", desc.name);
+        materials.push(build_material(desc, &prefix, path, search, textures)?);
+        Ok(materials.len() as u32 - 1)
+    };
+    let colors = model.mesh.colors.is_some();
+    let mut default = default_material(colors);
+    if colors {
+        default.name = format!("{DEFAULT_MATERIAL}_vertex_color");
+    }
+    let Some(faces) = &model.face_materials else {
+        return Ok((index_of(&default, materials)? as usize, None));
+    };
+    let mut map = Vec::with_capacity(model.materials.len());
+    for desc in &model.materials {
+        map.push(index_of(desc, materials)?);
+    }
+    let mut fallback = None;
+    let mut out = Vec::with_capacity(faces.len());
+    for &f in faces {
+        out.push(if f == NO_MATERIAL {
+            match fallback {
+                Some(k) => k,
+                None => *fallback.insert(index_of(&default, materials)?),
+            }
+        } else {
+            map[f as usize]
+        });
+    }
+    Ok((out.first().copied().unwrap_or(0) as usize, Some(out)))
 }
 
 #[cfg(test)]
