@@ -62,7 +62,7 @@ pub fn info(path: &Path) -> Result<Info> {
     }
     let ext = crate::io::extension(path);
     match ext.as_str() {
-        "m" | "obj" => {
+        "m" | "obj" | "ply" => {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
             let mut info = mesh_fields(&mesh, &ext, file_normals);
             info.warnings = warnings;

@@ -91,6 +91,23 @@ fn fuzz_corpus_mfile() {
 }
 
 #[test]
+fn fuzz_corpus_ply() {
+    let mut n = 0;
+    for (p, data) in corpus("ply") {
+        n += 1;
+        fuzz::ply(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(n >= 3);
+}
+
+#[test]
+fn fuzz_corpus_obj_mtl() {
+    for (p, data) in corpus("obj_mtl") {
+        fuzz::obj_mtl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+}
+
+#[test]
 fn fuzz_corpus_obj() {
     for (p, data) in corpus("obj") {
         if let Err(e) = fuzz::obj(&data) {

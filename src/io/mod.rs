@@ -6,6 +6,7 @@ pub mod mesh_scene;
 pub mod mfile;
 pub mod mtl;
 pub mod obj;
+pub mod ply;
 pub mod rays;
 pub mod scene_file;
 
@@ -53,9 +54,9 @@ pub fn load_model(path: &Path) -> Result<(obj::Model, Vec<String>)> {
 }
 
 /// The mesh formats [`load_mesh`] reads, by extension.
-pub const MESH_EXTENSIONS: [&str; 2] = ["m", "obj"];
+pub const MESH_EXTENSIONS: [&str; 3] = ["m", "obj", "ply"];
 
-/// Load a mesh by extension (`.m` or `.obj`); warnings are returned beside it.
+/// Load a mesh by extension (`.m`, `.obj` or `.ply`); warnings are returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
     load_mesh_detail(path).map(|(m, w, _)| (m, w))
 }
@@ -65,11 +66,12 @@ pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
     let parse = match extension(path).as_str() {
         "m" => mfile::parse_m_detail,
         "obj" => obj::parse_obj_detail,
+        "ply" => ply::parse_ply_detail,
         _ => {
             return Err(Error::parse(
                 path,
                 0,
-                "unknown mesh format (use .m or .obj)",
+                "unknown mesh format (use .m, .obj or .ply)",
             ));
         }
     };
