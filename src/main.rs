@@ -102,6 +102,10 @@ struct RenderArgs {
     /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
     #[arg(long)]
     stats: bool,
+    /// Override a scene value by its TOML path, e.g. `-D camera.vfov=30`,
+    /// `-D 'light[0].intensity=[1,1,1]'`, `-D render.depth=4` (repeatable, applied in order).
+    #[arg(short = 'D', value_name = "KEY=VALUE")]
+    define: Vec<String>,
 }
 
 fn set_threads(threads: Option<usize>) -> Result<()> {
@@ -233,7 +237,7 @@ fn cmd_scene(name: &str) -> Result<()> {
 
 fn cmd_render(args: RenderArgs) -> Result<()> {
     let name = args.scene.clone().unwrap_or_else(|| "demo".into());
-    let (mut file, path, dir) = if whitted::io::mesh_scene::is_mesh_file(Path::new(&name)) {
+    let (file, path, dir) = if whitted::io::mesh_scene::is_mesh_file(Path::new(&name)) {
         // A mesh alone: framed for the requested size; build_scene reports the warnings.
         let size = (args.width.unwrap_or(1024), args.height.unwrap_or(768));
         check_size(size.0, size.1).map_err(Error::Usage)?;
@@ -242,6 +246,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     } else {
         load_scene_file(&name)?
     };
+    let mut file = file.with_overrides(&args.define)?;
     if let Some(w) = args.width {
         file.image.width = w;
     }
@@ -286,7 +291,22 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let engine = parse_engine(&args.engine)?;
     set_threads(args.threads)?;
 
-    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))?;
+    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
+        .map_err(|e| {
+            // A value set by -D names the argument too.
+            let msg = e.to_string();
+            match whitted::io::scene_file::overrides_named(&msg, &args.define)[..] {
+                [] => e,
+                ref named => Error::Usage(format!(
+                    "{msg} (set by {})",
+                    named
+                        .iter()
+                        .map(|d| format!("-D '{d}'"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )),
+            }
+        })?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);
     }

@@ -366,6 +366,118 @@ impl SceneFile {
     }
 }
 
+/// One `-D key=value` override: a TOML path (`camera.vfov`, `light[0].intensity`) and a TOML
+/// value (`30`, `[1, 1, 1]`, `true`, `"name"`; anything that does not parse as TOML is taken
+/// as a string, so `-D background.cubemap=textures/cubemap` needs no quotes).
+fn apply_override(root: &mut toml::Value, def: &str) -> std::result::Result<(), String> {
+    let (key, value) = def
+        .split_once('=')
+        .ok_or("expected key=value (e.g. camera.vfov=30)")?;
+    let key = key.trim();
+    let value = value.trim();
+    let value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.to_string()));
+    let mut segments = Vec::new();
+    for seg in key.split('.') {
+        let (name, index) = match seg.split_once('[') {
+            Some((name, rest)) => {
+                let i = rest
+                    .strip_suffix(']')
+                    .and_then(|i| i.parse::<usize>().ok())
+                    .ok_or_else(|| format!("'{seg}': expected name[index]"))?;
+                (name, Some(i))
+            }
+            None => (seg, None),
+        };
+        if name.is_empty() {
+            return Err(format!("'{key}': empty name in the key"));
+        }
+        segments.push((name, index));
+    }
+    let last = segments.len() - 1;
+    let mut node = root;
+    for (k, (name, index)) in segments.into_iter().enumerate() {
+        let toml::Value::Table(table) = node else {
+            return Err(format!("'{name}': its parent is not a table"));
+        };
+        if k == last && index.is_none() {
+            table.insert(name.to_string(), value);
+            return Ok(());
+        }
+        let entry = table.entry(name.to_string()).or_insert_with(|| {
+            if index.is_some() {
+                toml::Value::Array(Vec::new())
+            } else {
+                toml::Value::Table(toml::Table::new())
+            }
+        });
+        node = match index {
+            None => entry,
+            Some(i) => {
+                let toml::Value::Array(items) = entry else {
+                    return Err(format!("'{name}' is not an array"));
+                };
+                // One past the end appends a new entry (a new light, material or mesh).
+                if i == items.len() {
+                    items.push(toml::Value::Table(toml::Table::new()));
+                }
+                let n = items.len();
+                let item = items
+                    .get_mut(i)
+                    .ok_or_else(|| format!("'{name}' has {n} entries (index 0..={n})"))?;
+                if k == last {
+                    *item = value;
+                    return Ok(());
+                }
+                item
+            }
+        };
+    }
+    unreachable!("the last segment returns")
+}
+
+impl SceneFile {
+    /// Apply `-D key=value` overrides in order, each checked as the file is (unknown keys,
+    /// types); errors name the `-D` argument. Values are validated by [`build_scene`].
+    pub fn with_overrides(&self, defs: &[String]) -> Result<SceneFile> {
+        if defs.is_empty() {
+            return Ok(self.clone());
+        }
+        let mut root = toml::Value::try_from(self).expect("scene serialises");
+        for def in defs {
+            let fail = |m: String| Error::Usage(format!("-D '{def}': {m}"));
+            apply_override(&mut root, def).map_err(fail)?;
+            // Check each override at once, so the error names the one that broke the scene.
+            SceneFile::deserialize(root.clone()).map_err(|e| {
+                fail(e.message().lines().next().unwrap_or("invalid").trim().to_string())
+            })?;
+        }
+        Ok(SceneFile::deserialize(root).expect("checked above"))
+    }
+}
+
+/// The `-D` arguments a validation message is about: the key, or its array entry and last
+/// name (messages write `material[0] 'glass'.kd` for `material[0].kd`).
+pub fn overrides_named<'a>(message: &str, defs: &'a [String]) -> Vec<&'a str> {
+    defs.iter()
+        .map(String::as_str)
+        .filter(|d| {
+            let key = d.split_once('=').map_or(*d, |(k, _)| k).trim();
+            if message.contains(key) {
+                return true;
+            }
+            match (key.split_once('.'), key.rsplit_once('.')) {
+                (Some((first, _)), Some((_, last))) => {
+                    message.contains(first) && message.contains(&format!(".{last}"))
+                }
+                _ => false,
+            }
+        })
+        .collect()
+}
+
 /// 1-based (line, column in characters) of byte offset `at`, clamped to the text.
 fn line_col(text: &[u8], at: usize) -> (usize, usize) {
     let before = &text[..at.min(text.len())];
