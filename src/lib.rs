@@ -16,6 +16,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod aov;
 pub mod bench;
 pub mod camera;
 pub mod error;

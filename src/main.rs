@@ -106,6 +106,10 @@ struct RenderArgs {
     /// `-D 'light[0].intensity=[1,1,1]'`, `-D render.depth=4` (repeatable, applied in order).
     #[arg(short = 'D', value_name = "KEY=VALUE")]
     define: Vec<String>,
+    /// Extra first-hit layers in the EXR beside the beauty image: any of albedo, normal,
+    /// depth, id (comma-separated; needs `-o file.exr`).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
 }
 
 fn set_threads(threads: Option<usize>) -> Result<()> {
@@ -287,26 +291,41 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             out.display()
         )));
     }
+    let aovs = match &args.aov {
+        None => None,
+        Some(list) => {
+            let aovs = whitted::aov::Aov::parse_list(list)
+                .map_err(|m| Error::Usage(format!("--aov {list}: {m}")))?;
+            if whitted::io::extension(&out) != "exr" {
+                return Err(Error::Usage(format!(
+                    "--aov {list}: AOV layers are written into an EXR beside the beauty image; {} is not .exr (use -o {}.exr)",
+                    out.display(),
+                    out.with_extension("").display()
+                )));
+            }
+            Some(aovs)
+        }
+    };
     check_subdivide(args.subdivide)?;
     let engine = parse_engine(&args.engine)?;
     set_threads(args.threads)?;
 
     let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
         .map_err(|e| {
-            // A value set by -D names the argument too.
-            let msg = e.to_string();
-            match whitted::io::scene_file::overrides_named(&msg, &args.define)[..] {
-                [] => e,
-                ref named => Error::Usage(format!(
-                    "{msg} (set by {})",
-                    named
-                        .iter()
-                        .map(|d| format!("-D '{d}'"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )),
-            }
-        })?;
+        // A value set by -D names the argument too.
+        let msg = e.to_string();
+        match whitted::io::scene_file::overrides_named(&msg, &args.define)[..] {
+            [] => e,
+            ref named => Error::Usage(format!(
+                "{msg} (set by {})",
+                named
+                    .iter()
+                    .map(|d| format!("-D '{d}'"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        }
+    })?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);
     }
@@ -346,7 +365,21 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             ),
         ));
     }
-    whitted::io::image::save_image(&image, &out)?;
+    let aov_time = std::time::Instant::now();
+    match &aovs {
+        None => whitted::io::image::save_image(&image, &out)?,
+        Some(aovs) => {
+            let layers = whitted::aov::capture(&world, aovs);
+            if !args.quiet {
+                eprintln!(
+                    "AOVs {} captured in {:.3} s",
+                    aovs.iter().map(|a| a.name()).collect::<Vec<_>>().join(","),
+                    aov_time.elapsed().as_secs_f64()
+                );
+            }
+            whitted::io::aov::save_exr_with_aovs(&image, &layers, &out)?;
+        }
+    }
     if !args.quiet {
         let r = &stats.rays;
         let total = r.total();

@@ -15,7 +15,7 @@ pub fn mfile(data: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// The OBJ loader (our validation, then tobj) on arbitrary bytes.
+/// The OBJ reader (geometry only) on arbitrary bytes.
 pub fn obj(data: &[u8]) -> Result<()> {
     let (mesh, _) = obj::parse_obj(data, Path::new("fuzz.obj"))?;
     check_mesh(&mesh);

@@ -1,5 +1,6 @@
 //! Reading and writing files: meshes (`.m`, `.obj`), scenes (TOML), images.
 
+pub mod aov;
 pub mod fuzz;
 pub mod image;
 pub mod mesh_scene;

@@ -451,7 +451,14 @@ impl SceneFile {
             apply_override(&mut root, def).map_err(fail)?;
             // Check each override at once, so the error names the one that broke the scene.
             SceneFile::deserialize(root.clone()).map_err(|e| {
-                fail(e.message().lines().next().unwrap_or("invalid").trim().to_string())
+                fail(
+                    e.message()
+                        .lines()
+                        .next()
+                        .unwrap_or("invalid")
+                        .trim()
+                        .to_string(),
+                )
             })?;
         }
         Ok(SceneFile::deserialize(root).expect("checked above"))
