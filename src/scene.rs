@@ -215,43 +215,51 @@ pub fn emitter_lights(objects: &[Object], materials: &[Material]) -> Vec<Light> 
         };
         axis * 2 + (n[axis] < 0.0) as usize
     };
-    let mut lights: Vec<(Vec3, Vec3)> = Vec::new();
-    for &lamp in &lamps {
-        let mut groups = [Group::default(); 6];
-        for o in objects {
-            for t in (0..o.mesh.triangles.len()).filter(|&t| material_of(o, t) == lamp) {
+    // One pass to sum area, centroid and normal per (material, normal bin), one for the
+    // frontmost vertex of each group: linear in the triangles whatever the number of lamps.
+    let is_lamp: Vec<bool> = (0..materials.len()).map(|m| lamps.contains(&m)).collect();
+    let mut groups = vec![Group::default(); materials.len() * 6];
+    let is_lamp = &is_lamp;
+    let lamp_triangles = || {
+        objects.iter().flat_map(move |o| {
+            (0..o.mesh.triangles.len()).filter_map(move |t| {
+                let m = material_of(o, t);
                 let c = o.mesh.face_cross(t);
-                let area = 0.5 * c.length();
-                if !(area > 0.0) {
-                    continue;
-                }
-                let g = &mut groups[bin(c)];
-                let [a, b, d] = o.mesh.triangles[t].map(|i| o.mesh.positions[i as usize]);
-                g.area += area;
-                g.centroid += area * (a + b + d) / 3.0;
-                g.normal += c;
-            }
+                (is_lamp[m] && c.length_squared() > 0.0).then(|| (o, t, m * 6 + bin(c), c))
+            })
+        })
+    };
+    for (o, t, g, c) in lamp_triangles() {
+        let area = 0.5 * c.length();
+        let [a, b, d] = o.mesh.triangles[t].map(|i| o.mesh.positions[i as usize]);
+        let g = &mut groups[g];
+        g.area += area;
+        g.centroid += area * (a + b + d) / 3.0;
+        g.normal += c;
+    }
+    let frame: Vec<(Vec3, Vec3)> = groups
+        .iter()
+        .enumerate()
+        .map(|(k, g)| {
+            let n = g.normal.try_normalize().unwrap_or(Vec3::AXES[(k % 6) / 2]);
+            (g.centroid / g.area, n)
+        })
+        .collect();
+    let mut front = vec![0.0f32; groups.len()];
+    for (o, t, g, _) in lamp_triangles() {
+        let (centroid, n) = frame[g];
+        for &i in &o.mesh.triangles[t] {
+            front[g] = front[g].max((o.mesh.positions[i as usize] - centroid).dot(n));
         }
-        for (k, g) in groups.iter().enumerate() {
-            if !(g.area > 0.0) {
-                continue;
-            }
-            let centroid = g.centroid / g.area;
-            let n = g.normal.try_normalize().unwrap_or(Vec3::AXES[k / 2]);
-            // Past the frontmost vertex of the group along n.
-            let mut front = 0.0f32;
-            for o in objects {
-                for t in (0..o.mesh.triangles.len()).filter(|&t| material_of(o, t) == lamp) {
-                    if bin(o.mesh.face_cross(t)) != k {
-                        continue;
-                    }
-                    for &i in &o.mesh.triangles[t] {
-                        front = front.max((o.mesh.positions[i as usize] - centroid).dot(n));
-                    }
-                }
-            }
-            let position = centroid + n * (front + margin);
-            lights.push((position, materials[lamp].ke * g.area));
+    }
+    let mut lights: Vec<(Vec3, Vec3)> = Vec::new();
+    for (k, g) in groups.iter().enumerate() {
+        if g.area > 0.0 && g.area.is_finite() {
+            let (centroid, n) = frame[k];
+            lights.push((
+                centroid + n * (front[k] + margin),
+                materials[k / 6].ke * g.area,
+            ));
         }
     }
     let total = lights.iter().fold(Vec3::ZERO, |s, l| s + l.1).max_element();

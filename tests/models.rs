@@ -37,8 +37,12 @@ fn ok(r: &Output) -> String {
 }
 
 /// Render `model` alone to an EXR of 64x48 with extra arguments; returns the image and stderr.
+/// The image goes to this run's temporary folder, never beside the model (shared data is
+/// read-only).
 fn render(model: &Path, extra: &[&str]) -> (Image, String) {
-    let out = model.with_extension("render.exr");
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let out = dir("renders").join(format!("{n}.exr"));
     let mut c = whitted();
     c.arg("render")
         .arg(model)
