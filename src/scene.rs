@@ -436,3 +436,73 @@ pub mod shapes {
         }
     }
 }
+
+#[cfg(test)]
+mod emitter_tests {
+    use super::*;
+
+    fn material(name: &str, ke: Vec3) -> Material {
+        Material {
+            name: name.into(),
+            albedo: Albedo::Color(Vec3::ONE),
+            ka: Vec3::ZERO,
+            kd: Vec3::ONE,
+            ks: Vec3::ZERO,
+            n: 1.0,
+            kt: Vec3::ZERO,
+            ior: 1.0,
+            kr: Vec3::ZERO,
+            ke,
+            lamp: true,
+        }
+    }
+
+    #[test]
+    fn a_lamp_gives_one_light_in_front_of_it_and_a_box_one_per_side() {
+        // A 0.5 x 0.5 lamp at y = 2 facing down, beside a floor of another material.
+        let lamp = shapes::quad(Vec3::new(0.0, 2.0, 0.0), Vec3::X * 0.25, Vec3::Z * 0.25);
+        let floor = shapes::quad(Vec3::ZERO, Vec3::X, Vec3::NEG_Z);
+        let objects = vec![
+            Object {
+                name: "lamp".into(),
+                mesh: lamp,
+                material: 0,
+                face_materials: None,
+            },
+            Object {
+                name: "floor".into(),
+                mesh: floor,
+                material: 1,
+                face_materials: None,
+            },
+        ];
+        let materials = vec![
+            material("lamp", Vec3::new(17.0, 12.0, 4.0)),
+            material("floor", Vec3::ZERO),
+        ];
+        let lights = emitter_lights(&objects, &materials);
+        assert_eq!(lights.len(), 1);
+        let l = lights[0];
+        // Just below the lamp (it faces -y), over its centre.
+        assert!(l.position.x.abs() < 1e-6 && l.position.z.abs() < 1e-6);
+        assert!(l.position.y < 2.0 && l.position.y > 1.99, "{}", l.position);
+        // Ke's ratios, the brightest channel 1.
+        assert!((l.intensity - Vec3::new(1.0, 12.0 / 17.0, 4.0 / 17.0)).length() < 1e-6);
+        // A lamp box: one light per side, outside the box; they sum to a brightest channel of 1.
+        let cube = Object {
+            name: "cube".into(),
+            mesh: shapes::cube(Vec3::ZERO, Vec3::splat(0.5)),
+            material: 0,
+            face_materials: None,
+        };
+        let lights = emitter_lights(&[cube], &materials);
+        assert_eq!(lights.len(), 6);
+        assert!(lights.iter().all(|l| l.position.abs().max_element() > 0.5));
+        let total = lights.iter().map(|l| l.intensity).sum::<Vec3>();
+        assert!((total.max_element() - 1.0).abs() < 1e-5);
+        // Without lamps, nothing (lamp = false also turns a material's lights off).
+        let mut off = materials.clone();
+        off[0].lamp = false;
+        assert!(emitter_lights(&objects, &off).is_empty());
+    }
+}
