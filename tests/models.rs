@@ -533,3 +533,27 @@ fn aov_layers_are_named_exr_channels_read_back_by_the_exr_crate() {
     let r = run(&["render", "-q", "--aov", "colour", "-o"], &[&out, &model]);
     assert!(String::from_utf8_lossy(&r.stderr).contains("unknown AOV 'colour'"));
 }
+
+#[test]
+fn malformed_model_files_give_one_line_errors_and_exit_code_2() {
+    let d = dir("bad files");
+    let cases: [(&str, &[u8], &str); 5] = [
+        ("a.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "a.ply:13: face 0 vertex_indices: vertex index 7 out of range (0..3)"),
+        ("b.ply", b"ply\nformat binary_big_endian 1.0\nelement vertex 99999999\nproperty float x\nproperty float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n", "claims 99999999 entries"),
+        ("c.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", "c.ply:11: vertex 1 y: 'inf' is not a finite number"),
+        ("d.obj", b"mtllib d.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "d.mtl:2: Kd: expected r [g b]"),
+        ("e.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", "e.obj:3: f: '3': v index 3 out of range"),
+    ];
+    std::fs::write(d.join("d.mtl"), "newmtl m\nKd 1 1\n").unwrap();
+    for (name, bytes, want) in cases {
+        let f = d.join(name);
+        std::fs::write(&f, bytes).unwrap();
+        let r = run(&["render", "-q", "-o"], &[&d.join("x.png"), &f]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(want) && err.trim().lines().count() == 1,
+            "{name}: {err}"
+        );
+    }
+}

@@ -235,7 +235,13 @@ pub fn to_material(
         let file = crate::io::obj::find_beside(dir, name);
         found = Some(file.is_some());
         match (file, has_uv) {
-            (Some(f), true) => Some(f.to_string_lossy().into_owned()),
+            // Absolute, so the scene finds it whatever folders its search path holds.
+            (Some(f), true) => Some(
+                std::path::absolute(&f)
+                    .unwrap_or(f)
+                    .to_string_lossy()
+                    .into_owned(),
+            ),
             (Some(_), false) => {
                 warnings.push(format!(
                     "{}: material '{}': map_Kd '{name}' needs uv coordinates, the mesh has none; using Kd",
