@@ -1,12 +1,14 @@
 //! AOVs ("arbitrary output variables"): first-hit quantities written beside the beauty image.
 //!
 //! They are captured in a pass of their own over the camera rays through pixel centres
-//! (`intersect1` and the scalar `surface`, the same hit and shading normal the renderers
-//! compute), so neither engine's loop changes; with `--spp > 1` the beauty image is averaged
+//! (4x2 camera packets through `intersect8`, then the scalar `surface` per hit: the same hit
+//! and shading normal the renderers compute), so neither engine's loop changes; with `--spp > 1` the beauty image is averaged
 //! but the AOVs stay one sample at the pixel centre (an averaged triangle id means nothing).
 
-use crate::accel::intersect1;
+use crate::accel::intersect8;
+use crate::packet::{PacketShape, camera_packet};
 use crate::shade::surface;
+use crate::simd::{self, LANES};
 use crate::world::World;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -74,33 +76,38 @@ pub fn capture(world: &World, aovs: &[Aov]) -> AovImages {
         depth: f32,
         id: u32,
     }
-    let pixels: Vec<Px> = (0..h as u32)
-        .into_par_iter()
-        .flat_map_iter(|j| {
-            let cam = &cam;
-            (0..w as u32).map(move |i| {
-                let ray = cam.primary_ray(i, j);
-                match intersect1(&world.accel, &ray, cull) {
-                    None => Px {
-                        albedo: Vec3::ZERO,
-                        normal: Vec3::ZERO,
-                        depth: f32::INFINITY,
-                        id: u32::MAX,
-                    },
-                    Some(hit) => {
-                        let s = surface(world, &ray, &hit);
-                        let m = &world.scene.materials[s.material as usize];
-                        Px {
-                            albedo: s.od * m.kd,
-                            normal: s.n,
-                            depth: hit.t * ray.dir.length(),
-                            id: hit.tri,
-                        }
-                    }
+    let miss = Px {
+        albedo: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        depth: f32::INFINITY,
+        id: u32::MAX,
+    };
+    let mut pixels = vec![miss; w * h];
+    // Pairs of rows in parallel, 4x2 camera packets through `intersect8` (each lane the
+    // scalar camera ray bit for bit), then the scalar `surface` per hit lane.
+    pixels
+        .par_chunks_mut(2 * w.max(1))
+        .enumerate()
+        .for_each(|(pair, rows)| {
+            let y0 = 2 * pair as u32;
+            for x0 in (0..w as u32).step_by(4) {
+                let (packet, active) = camera_packet(&cam, PacketShape::Block4x2, x0, y0, 0.5, 0.5);
+                let hits = intersect8(&world.accel, &packet, active, cull);
+                for i in (0..LANES).filter(|&i| simd::lane_set(active, i)) {
+                    let Some(hit) = hits.lane(i) else { continue };
+                    let (dx, dy) = PacketShape::Block4x2.offset(i);
+                    let ray = packet.lane(i);
+                    let s = surface(world, &ray, &hit);
+                    let m = &world.scene.materials[s.material as usize];
+                    rows[dy as usize * w + (x0 + dx) as usize] = Px {
+                        albedo: s.od * m.kd,
+                        normal: s.n,
+                        depth: hit.t * ray.dir.length(),
+                        id: hit.tri,
+                    };
                 }
-            })
-        })
-        .collect();
+            }
+        });
     let want = |a: Aov| aovs.contains(&a);
     AovImages {
         width: w,
