@@ -1,7 +1,7 @@
 //! Intersection throughput on the kitten, on the Embree peer's workloads (`whitted::bench`):
 //! primary (1920x1080 in 4x4 pixel blocks, ~90% miss), primary-hits-only, shadow (any hit)
-//! and incoherent, for the scalar (`intersect1`/`occluded1`) and packet (`intersect8`/
-//! `occluded8`, 8 consecutive rays) engines, single-threaded. The hit count and a checksum of
+//! and incoherent, for every engine (`whitted::bench::Engine::ALL`: scalar, packet8, wide1,
+//! hybrid8), single-threaded. The hit count and a checksum of
 //! the results are asserted outside the timed loop. Needs `WHITTED_ASSETS` (or `../shared`).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -24,7 +24,7 @@ fn bench(c: &mut Criterion) {
     for (workload, rays) in work.sets() {
         let packets = Packets::new(rays);
         let any = workload.any_hit();
-        // checksum: both engines give the same results, with the peer's counts on the kitten
+        // checksum: every engine gives the same results, with the peer's counts on the kitten
         let mut reference = Out::new(Engine::Scalar, any, rays);
         pass(&accel, rays, &packets, &mut reference, None);
         let reference = reference.results(rays.len());
@@ -44,7 +44,7 @@ fn bench(c: &mut Criterion) {
         g.sample_size(10);
         g.warm_up_time(Duration::from_millis(500));
         g.measurement_time(Duration::from_secs(2));
-        for engine in [Engine::Scalar, Engine::Packet] {
+        for engine in Engine::ALL {
             let mut out = Out::new(engine, any, rays);
             pass(&accel, rays, &packets, &mut out, None);
             let got = out.results(rays.len());

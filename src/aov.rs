@@ -28,8 +28,10 @@ pub enum Aov {
 }
 
 impl Aov {
+    /// Every AOV, in the order of their names.
     pub const ALL: [Aov; 4] = [Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Id];
 
+    /// Its name on the command line and in the EXR's channel names.
     pub fn name(self) -> &'static str {
         ["albedo", "normal", "depth", "id"][self as usize]
     }
@@ -56,11 +58,17 @@ impl Aov {
 /// The captured layers, row-major, one entry per pixel.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AovImages {
+    /// Image width in pixels.
     pub width: usize,
+    /// Image height in pixels.
     pub height: usize,
+    /// `Od * kd` at the first hit (0 on misses), if asked for.
     pub albedo: Option<Vec<Vec3>>,
+    /// The shading normal at the first hit, world space, facing the camera (0 on misses).
     pub normal: Option<Vec<Vec3>>,
+    /// Distance from the eye along the camera ray (`+inf` on misses).
     pub depth: Option<Vec<f32>>,
+    /// Index of the hit triangle in the scene (`0xFFFFFFFF` on misses).
     pub id: Option<Vec<u32>>,
 }
 

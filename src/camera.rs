@@ -7,19 +7,25 @@ use glam::Vec3;
 /// A camera ready to generate rays for a `width x height` image.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// The eye point, origin of every primary ray.
     pub eye: Vec3,
     /// Forward, right and up unit vectors: `f = normalize(look_at - eye)`,
     /// `r = normalize(cross(f, up))`, `u = cross(r, f)`.
     pub f: Vec3,
+    /// Right unit vector `r` (see `f`).
     pub r: Vec3,
+    /// Up unit vector `u` (see `f`).
     pub u: Vec3,
     /// `tan(vfov / 2)`.
     pub tan_half: f32,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
 }
 
 impl Camera {
+    /// The basis of SCENES.md §1 from a placement and an image size (`vfov_deg` in degrees).
     pub fn new(eye: Vec3, look_at: Vec3, up: Vec3, vfov_deg: f32, width: u32, height: u32) -> Self {
         let f = (look_at - eye).normalize();
         let r = f.cross(up).normalize();

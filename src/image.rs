@@ -5,12 +5,16 @@ use glam::Vec3;
 /// Linear RGB pixels, row-major, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// `width * height` linear RGB values, row-major.
     pub pixels: Vec<Vec3>,
 }
 
 impl Image {
+    /// A black image.
     pub fn new(width: usize, height: usize) -> Self {
         Image {
             width,
@@ -19,6 +23,7 @@ impl Image {
         }
     }
 
+    /// The pixel at column `x`, row `y` (row 0 at the top); panics outside the image.
     pub fn get(&self, x: usize, y: usize) -> Vec3 {
         self.pixels[y * self.width + x]
     }
@@ -30,6 +35,75 @@ impl Image {
             out.extend(p.to_array().map(srgb8));
         }
         out
+    }
+}
+
+/// A rectangle of pixels of an image, `x0..x1` by `y0..y1` (exclusive ends, pbrt's
+/// `--pixelbounds` order): the part of a render that `--crop`, `--pixel-bounds` and `--tile`
+/// select, and an EXR file's data window inside its display window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PixelBounds {
+    /// First column.
+    pub x0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// First row (row 0 is the top).
+    pub y0: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+impl PixelBounds {
+    /// The whole `width x height` image.
+    pub fn full(width: u32, height: u32) -> Self {
+        PixelBounds {
+            x0: 0,
+            x1: width,
+            y0: 0,
+            y1: height,
+        }
+    }
+
+    /// Columns inside (0 when empty).
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    /// Rows inside (0 when empty).
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// Pixels inside (0 when empty).
+    pub fn area(&self) -> u64 {
+        self.width() as u64 * self.height() as u64
+    }
+
+    /// Whether no pixel is inside.
+    pub fn is_empty(&self) -> bool {
+        self.area() == 0
+    }
+
+    /// The overlap of two rectangles (possibly empty).
+    pub fn intersect(&self, o: &PixelBounds) -> PixelBounds {
+        PixelBounds {
+            x0: self.x0.max(o.x0),
+            x1: self.x1.min(o.x1),
+            y0: self.y0.max(o.y0),
+            y1: self.y1.min(o.y1),
+        }
+    }
+
+    /// Whether `o` lies inside `self`.
+    pub fn contains(&self, o: &PixelBounds) -> bool {
+        o.x0 >= self.x0 && o.x1 <= self.x1 && o.y0 >= self.y0 && o.y1 <= self.y1
+    }
+}
+
+impl std::fmt::Display for PixelBounds {
+    /// `x 0..1024, y 192..384`: half-open ranges, as `--pixel-bounds` takes them.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "x {}..{}, y {}..{}", self.x0, self.x1, self.y0, self.y1)
     }
 }
 

@@ -1,10 +1,10 @@
 //! `whitted info FILE`: what a mesh, scene, image or cube-map folder holds, after the same
 //! validation as loading it for a render. As `key: value` lines or one JSON object.
 
-use crate::error::Result;
-use crate::io::image::{ImageInfo, decode_texture, load_cubemap_info};
-use crate::io::load_mesh_detail;
+use crate::error::{Error, Result};
+use crate::io::image::{IMAGE_EXTENSIONS, ImageInfo, decode_texture, load_cubemap_info};
 use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::mesh::Mesh;
 use crate::scene::Background;
 use serde_json::{Value, json};
@@ -13,6 +13,7 @@ use std::path::Path;
 /// An ordered list of facts about one file; `kind` comes first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Info {
+    /// `(key, value)` in print order.
     pub fields: Vec<(&'static str, Value)>,
     /// Loader warnings (degenerate faces, ignored `.mtl`, ...).
     pub warnings: Vec<String>,
@@ -62,7 +63,7 @@ pub fn info(path: &Path) -> Result<Info> {
     }
     let ext = crate::io::extension(path);
     match ext.as_str() {
-        "m" | "obj" | "ply" => {
+        e if crate::io::MESH_EXTENSIONS.contains(&e) => {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
             let mut info = mesh_fields(&mesh, &ext, file_normals);
             info.warnings = warnings;
@@ -77,10 +78,65 @@ pub fn info(path: &Path) -> Result<Info> {
         "toml" => scene_info(path),
         _ => {
             let bytes = crate::io::read_regular(path)?;
-            let (_, img) = decode_texture(&bytes, path)?;
-            Ok(image_fields("image", &img))
+            let known = IMAGE_EXTENSIONS.contains(&ext.as_str());
+            // An image is also recognised by its content, whatever its name.
+            match decode_texture(&bytes, path) {
+                Ok((_, img)) => {
+                    let mut info = image_fields("image", &img);
+                    if img.format == "exr" {
+                        info.fields.extend(exr_windows(&bytes));
+                    }
+                    Ok(info)
+                }
+                Err(Error::Image { msg, .. }) if !known && msg.starts_with("not a supported") => {
+                    Err(Error::Format {
+                        path: path.to_path_buf(),
+                        msg: format!("not a file type whitted reads; {}", file_types()),
+                    })
+                }
+                Err(e) => Err(e),
+            }
         }
     }
+}
+
+/// An EXR's display window (the whole image) and data window (the pixels stored: a part, for
+/// `render --tile/--crop`), as `{"x": [x0, x1], "y": [y0, y1]}` with exclusive ends, and its
+/// compression. The file decoded already, so its header is valid.
+fn exr_windows(bytes: &[u8]) -> Vec<(&'static str, Value)> {
+    let Ok(meta) = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+    else {
+        return Vec::new();
+    };
+    let Some(h) = meta.headers.first() else {
+        return Vec::new();
+    };
+    let window = |x0: i32, y0: i32, w: usize, h: usize| json!({"x": [x0 as i64, x0 as i64 + w as i64], "y": [y0 as i64, y0 as i64 + h as i64]});
+    let d = &h.shared_attributes.display_window;
+    let p = h.own_attributes.layer_position;
+    vec![
+        (
+            "display_window",
+            window(d.position.0, d.position.1, d.size.0, d.size.1),
+        ),
+        (
+            "data_window",
+            window(p.0, p.1, h.layer_size.0, h.layer_size.1),
+        ),
+        (
+            "compression",
+            json!(format!("{:?}", h.compression).to_ascii_lowercase()),
+        ),
+    ]
+}
+
+/// What `whitted info` reads, for its message about a file it does not.
+fn file_types() -> String {
+    format!(
+        "it reads meshes ({}), scenes (.toml), images ({}) and cube-map folders",
+        list_extensions(&MESH_EXTENSIONS),
+        list_extensions(&IMAGE_EXTENSIONS)
+    )
 }
 
 /// An f32 as the f64 with the same shortest decimal form (0.1, not 0.10000000149011612).

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
-use whitted::render::{MAX_SAMPLE_SECONDARY_RAYS, Settings, Stage, World, render};
+use whitted::render::{Settings, Stage, World};
 use whitted::{Error, Result, scenes};
 
 #[derive(Parser)]
@@ -39,8 +39,47 @@ enum Command {
     },
     /// Trace a binary ray file against a mesh and write the closest hits (see the README).
     TraceRays(TraceArgs),
+    /// Join EXR parts (`render --tile/--crop/--pixel-bounds`) into the image they share, after
+    /// checking they cover it exactly.
+    Merge(MergeArgs),
     /// Intersection throughput on the Embree peer's workloads, beside rt-bench when found.
     Bench(whitted::bench::Options),
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The parts, EXR files with the whole image as display window and the part as data window.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// The merged image, `.exr` or `.png`.
+    #[arg(long, short = 'o')]
+    outfile: PathBuf,
+    /// EXR output in 16-bit floats (implied when every part is 16-bit).
+    #[arg(long)]
+    half: bool,
+    /// EXR compression: piz (default), zip, rle or none (all lossless).
+    #[arg(long, default_value = "piz")]
+    exr_compression: String,
+    /// No summary line.
+    #[arg(long, short = 'q')]
+    quiet: bool,
+}
+
+fn cmd_merge(args: MergeArgs) -> Result<()> {
+    let opts = parse_exr_options(args.half, &args.exr_compression)?;
+    let start = std::time::Instant::now();
+    let display = whitted::io::merge::merge(&args.parts, &args.outfile, opts)?;
+    if !args.quiet {
+        eprintln!(
+            "merged {} parts into {}x{} in {:.2} s -> {}",
+            args.parts.len(),
+            display.x1,
+            display.y1,
+            start.elapsed().as_secs_f64(),
+            args.outfile.display()
+        );
+    }
+    Ok(())
 }
 
 #[derive(clap::Args)]
@@ -53,8 +92,9 @@ struct TraceArgs {
     /// Output hits: `u32 triangle, f32 t, f32 b1, f32 b2`, 16 bytes each.
     #[arg(long)]
     hits: PathBuf,
-    /// packet (intersect8, default) or scalar (intersect1).
-    #[arg(long, default_value = "packet")]
+    /// auto (= packet), packet (intersect8), wide (intersect_wide1, the 8-wide tree), hybrid
+    /// (intersect_hybrid8) or scalar (intersect1); all write the same bytes.
+    #[arg(long, default_value = "auto")]
     engine: String,
     /// Skip back faces.
     #[arg(long)]
@@ -96,8 +136,9 @@ struct RenderArgs {
     /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
-    /// packet (wavefront renderer on 8-wide packets, default) or scalar (the reference).
-    #[arg(long, default_value = "packet")]
+    /// auto (wavefront renderer, fastest kernel per queue, default), packet, wide or hybrid
+    /// (wavefront, that kernel for every queue) or scalar (the recursive reference).
+    #[arg(long, default_value = "auto")]
     engine: String,
     /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
     #[arg(long)]
@@ -110,6 +151,67 @@ struct RenderArgs {
     /// depth, id (comma-separated; needs `-o file.exr`).
     #[arg(long, value_name = "LIST")]
     aov: Option<String>,
+    /// Render only a crop window, as fractions of the image: x0,x1,y0,y1 (pbrt's
+    /// --cropwindow; pixels ceil(width x0)..ceil(width x1), the same in y).
+    #[arg(
+        long,
+        value_name = "X0,X1,Y0,Y1",
+        group = "part",
+        allow_hyphen_values = true
+    )]
+    crop: Option<String>,
+    /// Render only these pixels: x0,x1,y0,y1, exclusive ends.
+    #[arg(long, value_name = "X0,X1,Y0,Y1", group = "part")]
+    pixel_bounds: Option<String>,
+    /// Render the I-th (0-based) of N bands of rows, split on the 16-pixel tile grid the same
+    /// way for every I (for array jobs; `whitted merge` joins the parts).
+    #[arg(long, value_name = "I/N", group = "part")]
+    tile: Option<String>,
+    /// EXR output in 16-bit floats instead of 32-bit.
+    #[arg(long)]
+    half: bool,
+    /// EXR compression: piz (default), zip, rle or none (all lossless).
+    #[arg(long, default_value = "piz")]
+    exr_compression: String,
+}
+
+impl RenderArgs {
+    /// The part of the image asked for (the whole image by default).
+    fn part(&self) -> Result<whitted::render::part::Part> {
+        use whitted::render::part::Part;
+        let part = match (&self.crop, &self.pixel_bounds, &self.tile) {
+            (Some(c), _, _) => Part::parse_crop(c),
+            (_, Some(p), _) => Part::parse_pixel_bounds(p),
+            (_, _, Some(t)) => Part::parse_tile(t),
+            _ => Ok(Part::Full),
+        };
+        part.map_err(Error::Usage)
+    }
+}
+
+fn parse_exr_options(half: bool, compression: &str) -> Result<whitted::io::output::ExrOptions> {
+    use whitted::io::output::{ExrCompression, ExrOptions};
+    let compression = ExrCompression::from_name(compression).ok_or_else(|| {
+        Error::Usage(format!(
+            "unknown EXR compression '{compression}' ({})",
+            ExrCompression::NAMES.join(", ")
+        ))
+    })?;
+    Ok(ExrOptions { compression, half })
+}
+
+/// `--subdivide k` on meshes of `triangles` in all: refused before anything is allocated when
+/// it would pass the scene's triangle cap.
+fn check_subdivided_triangles(k: u32, triangles: u64) -> Result<()> {
+    use whitted::io::scene_file::MAX_SCENE_TRIANGLES;
+    let made = triangles.saturating_mul(1u64 << (2 * k.min(16)));
+    if made > MAX_SCENE_TRIANGLES {
+        return Err(Error::Usage(format!(
+            "--subdivide {k} would make {made} triangles from {triangles}, over the cap of \
+             {MAX_SCENE_TRIANGLES}"
+        )));
+    }
+    Ok(())
 }
 
 fn set_threads(threads: Option<usize>) -> Result<()> {
@@ -123,13 +225,11 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 }
 
 fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
-    match name {
-        "packet" => Ok(whitted::trace::Engine::Packet),
-        "scalar" => Ok(whitted::trace::Engine::Scalar),
-        e => Err(Error::Usage(format!(
-            "unknown engine '{e}' (packet, scalar)"
-        ))),
-    }
+    whitted::trace::Engine::from_name(name).ok_or_else(|| {
+        Error::Usage(format!(
+            "unknown engine '{name}' (auto, packet, wide, hybrid, scalar)"
+        ))
+    })
 }
 
 fn check_subdivide(k: u32) -> Result<()> {
@@ -151,6 +251,7 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
     for w in warnings {
         eprintln!("warning: {w}");
     }
+    check_subdivided_triangles(args.subdivide, mesh.triangles.len() as u64)?;
     let mesh = mesh.subdivide(args.subdivide);
     let tris: Vec<[glam::Vec3; 3]> = mesh
         .triangles
@@ -185,6 +286,7 @@ fn main() -> ExitCode {
         Command::Scene { name } => cmd_scene(&name),
         Command::Info { file, json } => whitted::info::print(&file, json),
         Command::TraceRays(args) => cmd_trace_rays(args),
+        Command::Merge(args) => cmd_merge(args),
         Command::Bench(opts) => whitted::bench::run(&opts),
     };
     match result {
@@ -233,7 +335,7 @@ fn cmd_scene(name: &str) -> Result<()> {
         ))
     })?;
     print!(
-        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, then the folders of WHITTED_ASSETS.\n{}",
+        "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, the folders of WHITTED_ASSETS, then whitted's own data folder.\n{}",
         s.to_toml()
     );
     Ok(())
@@ -257,7 +359,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     if let Some(h) = args.height {
         file.image.height = h;
     }
-    check_size(file.image.width, file.image.height).map_err(Error::Usage)?;
+    let (w, h) = check_size(file.image.width, file.image.height).map_err(Error::Usage)?;
     let stage = match &args.stage {
         None => None,
         Some(s) => Some(Stage::from_name(s).ok_or_else(|| {
@@ -310,6 +412,23 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let engine = parse_engine(&args.engine)?;
     set_threads(args.threads)?;
 
+    let part_arg = args.part()?;
+    let part = part_arg.bounds(w, h).map_err(Error::Usage)?;
+    let exr = parse_exr_options(args.half, &args.exr_compression)?;
+    if let (Some(list), Some(_)) = (&args.aov, &aovs) {
+        // The AOV layers are captured over the whole image and written by their own EXR writer.
+        if !part_arg.is_full() {
+            return Err(Error::Usage(format!(
+                "--aov {list}: AOV layers are written for the whole image only, not with --crop, --pixel-bounds or --tile"
+            )));
+        }
+        if exr != whitted::io::output::ExrOptions::default() {
+            return Err(Error::Usage(format!(
+                "--aov {list}: the AOV EXR is written in 32-bit floats with its own compression; --half and --exr-compression do not apply"
+            )));
+        }
+    }
+
     let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
         .map_err(|e| {
         // A value set by -D names the argument too.
@@ -326,6 +445,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             )),
         }
     })?;
+    check_subdivided_triangles(args.subdivide, scene.triangle_count() as u64)?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);
     }
@@ -339,36 +459,60 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         engine,
     };
     let world = World::new(scene);
-    let (w, h) = (world.scene.width, world.scene.height);
+    // what is rendered: the image, or a part of it
+    let what = if part_arg.is_full() {
+        format!("{w}x{h} {name}")
+    } else {
+        format!(
+            "{}x{} part ({part}) of {w}x{h} {name}",
+            part.width(),
+            part.height()
+        )
+    };
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
-        let b = ProgressBar::new(w as u64 * h as u64);
+        let b = ProgressBar::new(part.area());
+        let prefix = if part_arg.is_full() {
+            String::new()
+        } else {
+            format!("part {part} ")
+        };
         b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}",
-            )
+            ProgressStyle::with_template(&format!(
+                "{{spinner}} {prefix}[{{elapsed_precise}}] {{wide_bar}} {{percent}}% ETA {{eta}}"
+            ))
             .expect("template"),
         );
         b
     };
-    let (image, stats) = render(&world, &settings, &|n| bar.inc(n));
-    bar.finish_and_clear();
-    if let Some((x, y)) = stats.over_budget_pixel(w) {
-        return Err(Error::scene(
-            &path,
-            format!(
-                "pixel ({x}, {y}): a camera sample spawned over {MAX_SAMPLE_SECONDARY_RAYS} \
-                 reflection and refraction rays (render.depth {}): rays are trapped between \
-                 surfaces that both reflect and refract; lower render.depth (--depth)",
-                settings.depth(&world.scene)
-            ),
-        ));
-    }
-    let aov_time = std::time::Instant::now();
-    match &aovs {
-        None => whitted::io::image::save_image(&image, &out)?,
+    let stats = match &aovs {
+        // Rows stream into the file as bands finish; a failed render leaves no file behind.
+        None => {
+            let mut stats = None;
+            let wrote = whitted::io::output::write_streamed(&out, (w, h), part, exr, &mut |sink| {
+                let s =
+                    whitted::render::render_rows(&world, &settings, part, &|n| bar.inc(n), sink)?;
+                let over = s.budget_error(&world, &settings);
+                stats = Some(s);
+                match over {
+                    None => Ok(()),
+                    Some(msg) => Err(Error::scene(&path, msg)),
+                }
+            });
+            bar.finish_and_clear();
+            wrote?;
+            stats.expect("the render ran")
+        }
+        // The beauty image in memory, then one EXR with the AOV layers beside it (written
+        // through a temporary file too).
         Some(aovs) => {
+            let (image, stats) = whitted::render::render(&world, &settings, &|n| bar.inc(n));
+            bar.finish_and_clear();
+            if let Some(msg) = stats.budget_error(&world, &settings) {
+                return Err(Error::scene(&path, msg));
+            }
+            let aov_time = std::time::Instant::now();
             let layers = whitted::aov::capture(&world, aovs);
             if !args.quiet {
                 eprintln!(
@@ -378,17 +522,15 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
                 );
             }
             whitted::io::aov::save_exr_with_aovs(&image, &layers, &out)?;
+            stats
         }
-    }
+    };
     if !args.quiet {
         let r = &stats.rays;
         let total = r.total();
         let secs = stats.time.as_secs_f64();
         eprintln!(
-            "{}x{} {} in {:.2} s (BVH {:.1} ms, {} triangles): {} rays (primary {}, shadow {}, reflection {}, refraction {}), {:.2} Mrays/s -> {}",
-            w,
-            h,
-            name,
+            "{what} in {:.2} s (BVH {:.1} ms, {} triangles): {} rays (primary {}, shadow {}, reflection {}, refraction {}), {:.2} Mrays/s -> {}",
             secs,
             world.accel.build_time.as_secs_f64() * 1e3,
             world.accel.tris.len(),
@@ -432,7 +574,7 @@ fn print_stats(
     println!(
         "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
     );
-    if engine == whitted::trace::Engine::Packet {
+    if engine != whitted::trace::Engine::Scalar {
         let rays_of = [primary, primary + refl + refr, shadow, refl + refr];
         for (k, name) in whitted::render::RenderStats::PHASES.iter().enumerate() {
             let secs = load(&stats.phase_ns[k]) as f64 * 1e-9;
@@ -447,7 +589,7 @@ fn print_stats(
             );
         }
     } else {
-        println!("phases            (only the packet engine times its phases)");
+        println!("phases            (only the wavefront engines time their phases)");
     }
     let secs = stats.time.as_secs_f64();
     println!(

@@ -6,10 +6,15 @@ use glam::{Vec2, Vec3};
 /// present, has exactly one entry per position.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions.
     pub positions: Vec<Vec3>,
+    /// Counter-clockwise vertex indices (front = CCW).
     pub triangles: Vec<[u32; 3]>,
+    /// Unit vertex normals, if the file gave them (or after [`Mesh::ensure_normals`]).
     pub normals: Option<Vec<Vec3>>,
+    /// Texture coordinates per vertex.
     pub uvs: Option<Vec<Vec2>>,
+    /// Linear RGB colour per vertex.
     pub colors: Option<Vec<Vec3>>,
 }
 

@@ -9,9 +9,13 @@ use glam::Vec3;
 /// computation by the `active` mask that travels with the packet.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayPacket8 {
+    /// Origins.
     pub o: Vec3x8,
+    /// Directions.
     pub d: Vec3x8,
+    /// Near bounds.
     pub tnear: F32x8,
+    /// Far bounds.
     pub tfar: F32x8,
 }
 
@@ -32,6 +36,7 @@ impl RayPacket8 {
         (packet, simd::mask_from_bits(bits))
     }
 
+    /// Lane `i` as a ray.
     pub fn lane(&self, i: usize) -> Ray {
         Ray::new(
             Vec3::from(self.o.lane(i)),
@@ -41,6 +46,7 @@ impl RayPacket8 {
         )
     }
 
+    /// Replace lane `i` (slow; for tests).
     pub fn set_lane(&mut self, i: usize, ray: &Ray) {
         let mut lanes = (0..LANES).map(|k| self.lane(k)).collect::<Vec<_>>();
         lanes[i] = *ray;
@@ -59,6 +65,7 @@ pub enum PacketShape {
 }
 
 impl PacketShape {
+    /// `(columns, rows)` of the packet's pixels.
     pub fn size(self) -> (u32, u32) {
         match self {
             PacketShape::Block4x2 => (4, 2),
@@ -107,13 +114,18 @@ pub fn camera_packet(
 /// Closest hits of a packet; lanes without a hit have `tri == Hit::NONE_ID`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HitPacket8 {
+    /// Triangle per lane (`Hit::NONE_ID` = no hit).
     pub tri: U32x8,
+    /// Ray parameter per lane.
     pub t: F32x8,
+    /// Barycentric weight of the second vertex.
     pub b1: F32x8,
+    /// Barycentric weight of the third vertex.
     pub b2: F32x8,
 }
 
 impl HitPacket8 {
+    /// A packet of misses (`t = inf`).
     pub fn none() -> Self {
         HitPacket8 {
             tri: U32x8::splat(Hit::NONE_ID),
@@ -123,6 +135,7 @@ impl HitPacket8 {
         }
     }
 
+    /// Lane `i`'s hit, if any.
     pub fn lane(&self, i: usize) -> Option<Hit> {
         let tri = simd::u32_lanes(self.tri)[i];
         (tri != Hit::NONE_ID).then(|| Hit {
@@ -133,6 +146,7 @@ impl HitPacket8 {
         })
     }
 
+    /// Set lane `i`'s hit (`None` = a miss).
     pub fn set_lane(&mut self, i: usize, hit: Option<Hit>) {
         let h = hit.unwrap_or(Hit {
             tri: Hit::NONE_ID,

@@ -5,13 +5,18 @@ use glam::Vec3;
 /// A ray `origin + t dir`, accepting hits with `tnear < t < tfar`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
+    /// Where the ray starts.
     pub origin: Vec3,
+    /// Its direction (unit length for rendered rays).
     pub dir: Vec3,
+    /// Hits need `t > tnear`.
     pub tnear: f32,
+    /// Hits need `t < tfar`.
     pub tfar: f32,
 }
 
 impl Ray {
+    /// A ray from its parts.
     pub fn new(origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> Self {
         Ray {
             origin,
@@ -26,9 +31,13 @@ impl Ray {
 /// ray parameter and the barycentric weights of the triangle's second and third vertex.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// Index of the triangle hit.
     pub tri: u32,
+    /// Ray parameter of the hit point.
     pub t: f32,
+    /// Barycentric weight of the triangle's second vertex.
     pub b1: f32,
+    /// Barycentric weight of the third vertex.
     pub b2: f32,
 }
 

@@ -9,13 +9,16 @@ use std::sync::Arc;
 /// A point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
+    /// Where the light is.
     pub position: Vec3,
+    /// RGB intensity `Ip`.
     pub intensity: Vec3,
 }
 
 /// Where a surface's colour `Od` comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Albedo {
+    /// A constant colour (linear RGB).
     Color(Vec3),
     /// The interpolated per-vertex `rgb` of the mesh.
     VertexColor,
@@ -30,13 +33,21 @@ pub enum Albedo {
 /// computes exactly what the scalar model computed (`x * k` per channel).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
+    /// The name meshes refer to it by.
     pub name: String,
+    /// Where `Od` comes from.
     pub albedo: Albedo,
+    /// Ambient coefficient `ka`.
     pub ka: Vec3,
+    /// Diffuse coefficient `kd`.
     pub kd: Vec3,
+    /// Specular and reflection coefficient `ks` (per channel).
     pub ks: Vec3,
+    /// Phong exponent `n`.
     pub n: f32,
+    /// Transmission coefficient `kt`.
     pub kt: Vec3,
+    /// Index of refraction.
     pub ior: f32,
     /// Weight of the reflection ray (`ks` unless the scene or an MTL file separates them).
     pub kr: Vec3,
@@ -67,11 +78,14 @@ impl Material {
 /// What a ray that hits nothing sees.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Background {
+    /// A constant colour.
     Color(Vec3),
+    /// The cube map's colour in the ray's direction.
     CubeMap(Arc<CubeMap>),
 }
 
 impl Background {
+    /// The colour seen along `dir`.
     pub fn sample(&self, dir: Vec3) -> Vec3 {
         match self {
             Background::Color(c) => *c,
@@ -83,7 +97,9 @@ impl Background {
 /// A mesh placed in the scene with its material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Object {
+    /// Its name in messages.
     pub name: String,
+    /// Its triangles.
     pub mesh: Mesh,
     /// The scene material of every triangle, unless `face_materials` is given.
     pub material: usize,
@@ -94,32 +110,51 @@ pub struct Object {
 /// Camera placement as written in a scene (the image size is separate so it can be overridden).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
+    /// The eye point.
     pub eye: Vec3,
+    /// The point looked at.
     pub look_at: Vec3,
+    /// The up direction.
     pub up: Vec3,
+    /// Vertical field of view in degrees.
     pub vfov: f32,
 }
 
+/// A validated scene, everything loaded: what [`build_scene`](crate::io::scene_file::build_scene)
+/// makes of a scene file, ready for [`World::new`](crate::render::World::new) (or
+/// [`Scene::render`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// The camera placement.
     pub view: View,
+    /// Ambient light `Ia`.
     pub ambient: Vec3,
+    /// What rays that miss see.
     pub background: Background,
+    /// Point lights.
     pub lights: Vec<Light>,
+    /// Materials, referred to by index.
     pub materials: Vec<Material>,
+    /// The meshes with their materials.
     pub objects: Vec<Object>,
+    /// Skip back faces, for every ray.
     pub cull_backfaces: bool,
+    /// Reflection / refraction bounces.
     pub depth: u32,
 }
 
 impl Scene {
+    /// The camera for this view and image size.
     pub fn camera(&self) -> Camera {
         let v = &self.view;
         Camera::new(v.eye, v.look_at, v.up, v.vfov, self.width, self.height)
     }
 
+    /// Triangles of all objects.
     pub fn triangle_count(&self) -> usize {
         self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
     }
@@ -277,11 +312,17 @@ pub fn emitter_lights(objects: &[Object], materials: &[Material]) -> Vec<Light> 
 /// with per-vertex normals, uvs and colours for shading.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Geometry {
+    /// Vertex positions of all objects.
     pub positions: Vec<Vec3>,
+    /// Unit shading normals per vertex.
     pub normals: Vec<Vec3>,
+    /// Texture coordinates per vertex ((0, 0) where a mesh has none).
     pub uvs: Vec<Vec2>,
+    /// Colours per vertex (white where a mesh has none).
     pub colors: Vec<Vec3>,
+    /// Vertex indices per triangle.
     pub triangles: Vec<[u32; 3]>,
+    /// The object each triangle belongs to.
     pub tri_object: Vec<u32>,
     /// Scene material index per triangle.
     pub tri_material: Vec<u32>,
@@ -290,6 +331,7 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// The corners of triangle `t`.
     pub fn triangle(&self, t: u32) -> [Vec3; 3] {
         self.triangles[t as usize].map(|i| self.positions[i as usize])
     }
@@ -310,6 +352,13 @@ impl Geometry {
 /// Meshes generated in code, for the demo scene and for `shape = ...` in scene files.
 pub mod shapes {
     use super::*;
+
+    /// Triangles of [`sphere`] with `segments`, known before it is made (for the scene caps).
+    pub fn sphere_triangle_count(segments: u32) -> u64 {
+        let (nu, nv) = (segments.max(3) as u64 * 2, segments.max(2) as u64);
+        // Every band has 2 triangles per segment, except the two polar bands (1 each).
+        2 * nu * (nv - 1)
+    }
 
     /// A UV sphere with outward normals and `(u, v)` = (longitude, latitude) in [0, 1].
     pub fn sphere(center: Vec3, radius: f32, segments: u32) -> Mesh {
@@ -406,6 +455,10 @@ pub mod shapes {
 
         #[test]
         fn shapes_are_closed_and_outward() {
+            for seg in [0, 1, 2, 3, 8, 48] {
+                let n = sphere(Vec3::ZERO, 1.0, seg).triangles.len() as u64;
+                assert_eq!(n, sphere_triangle_count(seg), "{seg} segments");
+            }
             let s = sphere(Vec3::ZERO, 2.0, 8);
             // (The uv seam and the poles duplicate vertices, so open_edges() is not 0.)
             assert_eq!(s.degenerate_count(), 0);

@@ -13,36 +13,45 @@ pub use wide::u32x8 as U32x8;
 /// A lane mask: all-ones lanes are true.
 pub type M32x8 = F32x8;
 
+/// Lanes of every vector type.
 pub const LANES: usize = 8;
 
+/// All lanes `v`.
 #[inline(always)]
 pub fn splat(v: f32) -> F32x8 {
     F32x8::splat(v)
 }
+/// The lanes as an array.
 #[inline(always)]
 pub fn lanes(v: F32x8) -> [f32; 8] {
     v.to_array()
 }
+/// A vector from an array of lanes.
 #[inline(always)]
 pub fn from_lanes(a: [f32; 8]) -> F32x8 {
     F32x8::from(a)
 }
+/// `a < b` per lane.
 #[inline(always)]
 pub fn lt(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_lt(b)
 }
+/// `a <= b` per lane.
 #[inline(always)]
 pub fn le(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_le(b)
 }
+/// `a > b` per lane.
 #[inline(always)]
 pub fn gt(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_gt(b)
 }
+/// `a >= b` per lane.
 #[inline(always)]
 pub fn ge(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_ge(b)
 }
+/// `a == b` per lane.
 #[inline(always)]
 pub fn eq(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_eq(b)
@@ -63,14 +72,17 @@ pub fn select_u32(m: M32x8, a: U32x8, b: U32x8) -> U32x8 {
 pub fn lt_u32(a: U32x8, b: U32x8) -> M32x8 {
     wide::bytemuck::cast(a.simd_lt(b))
 }
+/// Whether any lane is set.
 #[inline(always)]
 pub fn any(m: M32x8) -> bool {
     m.any()
 }
+/// Whether no lane is set.
 #[inline(always)]
 pub fn none(m: M32x8) -> bool {
     !m.any()
 }
+/// The lane mask as bits (bit `i` = lane `i`).
 #[inline(always)]
 pub fn bitmask(m: M32x8) -> u32 {
     m.to_bitmask()
@@ -93,22 +105,27 @@ pub fn mask_from_bits(bits: u32) -> M32x8 {
 pub fn lane_set(m: M32x8, i: usize) -> bool {
     bitmask(m) >> i & 1 == 1
 }
+/// Per-lane minimum (`fast_min`: a NaN lane gives either operand).
 #[inline(always)]
 pub fn min(a: F32x8, b: F32x8) -> F32x8 {
     a.fast_min(b)
 }
+/// Per-lane maximum (`fast_max`: a NaN lane gives either operand).
 #[inline(always)]
 pub fn max(a: F32x8, b: F32x8) -> F32x8 {
     a.fast_max(b)
 }
+/// Per-lane square root (exact IEEE).
 #[inline(always)]
 pub fn sqrt(a: F32x8) -> F32x8 {
     a.sqrt()
 }
+/// The u32 lanes as an array.
 #[inline(always)]
 pub fn u32_lanes(v: U32x8) -> [u32; 8] {
     v.to_array()
 }
+/// A u32 vector from an array of lanes.
 #[inline(always)]
 pub fn u32_from_lanes(a: [u32; 8]) -> U32x8 {
     U32x8::from(a)
@@ -127,16 +144,21 @@ pub fn lanes_from<T: Copy>(v: &[T], start: usize, pad: T) -> [T; LANES] {
 /// Eight 3-vectors in SoA form.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Vec3x8 {
+    /// x components.
     pub x: F32x8,
+    /// y components.
     pub y: F32x8,
+    /// z components.
     pub z: F32x8,
 }
 
 impl Vec3x8 {
+    /// From three SoA component vectors.
     #[inline(always)]
     pub fn new(x: F32x8, y: F32x8, z: F32x8) -> Self {
         Vec3x8 { x, y, z }
     }
+    /// The same vector in every lane.
     #[inline(always)]
     pub fn splat(v: [f32; 3]) -> Self {
         Vec3x8::new(splat(v[0]), splat(v[1]), splat(v[2]))
@@ -146,6 +168,7 @@ impl Vec3x8 {
     pub fn dot(self, o: Self) -> F32x8 {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
+    /// Cross product per lane, in the scalar kernels' operation order.
     #[inline(always)]
     pub fn cross(self, o: Self) -> Self {
         Vec3x8::new(
@@ -154,6 +177,7 @@ impl Vec3x8 {
             self.x * o.y - self.y * o.x,
         )
     }
+    /// Each lane scaled by its `s`.
     #[inline(always)]
     pub fn scale(self, s: F32x8) -> Self {
         Vec3x8::new(self.x * s, self.y * s, self.z * s)
@@ -168,6 +192,7 @@ impl Vec3x8 {
     pub fn mul_elem(self, o: Self) -> Self {
         Vec3x8::new(self.x * o.x, self.y * o.y, self.z * o.z)
     }
+    /// `m ? a : b` per lane.
     #[inline(always)]
     pub fn select(m: M32x8, a: Self, b: Self) -> Self {
         Vec3x8::new(
@@ -176,6 +201,7 @@ impl Vec3x8 {
             select(m, a.z, b.z),
         )
     }
+    /// Lane `i` as `[x, y, z]`.
     #[inline(always)]
     pub fn lane(&self, i: usize) -> [f32; 3] {
         [lanes(self.x)[i], lanes(self.y)[i], lanes(self.z)[i]]
@@ -191,6 +217,7 @@ impl Vec3x8 {
         let get = |v: &Vec<f32>| from_lanes(lanes_from(v, start, pad));
         Vec3x8::new(get(&a[0]), get(&a[1]), get(&a[2]))
     }
+    /// Lane `i` from `f(i)`.
     pub fn from_fn(f: impl Fn(usize) -> [f32; 3]) -> Self {
         let v: [[f32; 3]; 8] = std::array::from_fn(f);
         Vec3x8::new(

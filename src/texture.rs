@@ -5,19 +5,25 @@ use glam::{Vec2, Vec3};
 /// A linear-RGB image used for lookups. Row 0 is the top row of the image file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
+    /// Width in texels.
     pub width: usize,
+    /// Height in texels.
     pub height: usize,
+    /// `width * height` linear RGB texels, row-major.
     pub texels: Vec<Vec3>,
 }
 
 /// How lookups outside `[0, w) x [0, h)` behave.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Wrap {
+    /// Wrap around (textures).
     Repeat,
+    /// Clamp to the edge texel (cube-map faces).
     Clamp,
 }
 
 impl Texture {
+    /// A texture from its texels; panics unless there are `width * height > 0` of them.
     pub fn new(width: usize, height: usize, texels: Vec<Vec3>) -> Self {
         assert_eq!(texels.len(), width * height, "texture size");
         assert!(width > 0 && height > 0, "empty texture");
@@ -86,6 +92,7 @@ pub const CUBE_FACES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz
 /// Six square faces of one size, indexed in [`CUBE_FACES`] order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CubeMap {
+    /// The faces in [`CUBE_FACES`] order.
     pub faces: [Texture; 6],
 }
 

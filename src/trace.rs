@@ -1,17 +1,53 @@
 //! Tracing bare ray batches (no shading) with either engine: `whitted trace-rays`, benches.
 
-use crate::accel::{Accel, intersect1, intersect8};
+use crate::accel::{Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8};
 use crate::packet::RayPacket8;
 use crate::ray::{Hit, Ray};
 use rayon::prelude::*;
 
-/// Which traversal to use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which traversal to use. Every engine returns the same hits bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Engine {
-    /// `intersect8` on packets of 8 consecutive rays.
+    /// The fastest kernel per kind of ray, chosen by measurement: in the renderer per queue
+    /// (`render::wavefront::AUTO`), for bare ray batches `packet`.
+    #[default]
+    Auto,
+    /// `intersect8` on packets of 8 consecutive rays over the binary tree.
     Packet,
-    /// `intersect1` ray by ray (the reference).
+    /// `intersect_wide1` ray by ray over the 8-wide tree.
+    Wide,
+    /// `intersect_hybrid8`: packets of 8 over the binary tree that hand their last few
+    /// lanes to single-ray traversal of the 8-wide tree.
+    Hybrid,
+    /// `intersect1` ray by ray over the binary tree (the reference).
     Scalar,
+}
+
+impl Engine {
+    /// Every engine, by name.
+    pub const ALL: [Engine; 5] = [
+        Engine::Auto,
+        Engine::Packet,
+        Engine::Wide,
+        Engine::Hybrid,
+        Engine::Scalar,
+    ];
+
+    /// The engine's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::Auto => "auto",
+            Engine::Packet => "packet",
+            Engine::Wide => "wide",
+            Engine::Hybrid => "hybrid",
+            Engine::Scalar => "scalar",
+        }
+    }
+
+    /// The engine called `name`.
+    pub fn from_name(name: &str) -> Option<Engine> {
+        Engine::ALL.into_iter().find(|e| e.name() == name)
+    }
 }
 
 /// Rays per parallel work item (a multiple of 8).
@@ -24,10 +60,18 @@ pub fn trace_rays(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool) -> Ve
             let mut out = Vec::with_capacity(chunk.len());
             match engine {
                 Engine::Scalar => out.extend(chunk.iter().map(|r| intersect1(accel, r, cull))),
-                Engine::Packet => {
+                Engine::Wide => {
+                    out.extend(chunk.iter().map(|r| intersect_wide1(accel, r, cull)));
+                }
+                Engine::Auto | Engine::Packet | Engine::Hybrid => {
+                    let f = if engine == Engine::Hybrid {
+                        intersect_hybrid8
+                    } else {
+                        intersect8
+                    };
                     for group in chunk.chunks(8) {
                         let (packet, active) = RayPacket8::from_fn(|i| group.get(i).copied());
-                        let hits = intersect8(accel, &packet, active, cull);
+                        let hits = f(accel, &packet, active, cull);
                         out.extend((0..group.len()).map(|i| hits.lane(i)));
                     }
                 }

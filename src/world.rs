@@ -21,6 +21,7 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// Every stage, in the assignment's order.
     pub const ALL: [Stage; 5] = [
         Stage::Intersection,
         Stage::Diffuse,
@@ -29,6 +30,7 @@ impl Stage {
         Stage::Reflection,
     ];
 
+    /// The stage's name on the command line.
     pub fn name(self) -> &'static str {
         [
             "intersection",
@@ -39,6 +41,7 @@ impl Stage {
         ][self as usize]
     }
 
+    /// The stage of a command-line name.
     pub fn from_name(s: &str) -> Option<Stage> {
         Stage::ALL.into_iter().find(|st| st.name() == s)
     }
@@ -47,12 +50,16 @@ impl Stage {
 /// Which terms of the equation are on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Terms {
+    /// White wherever a primary ray hits (the `intersection` stage).
     pub white: bool,
+    /// The Phong term is on.
     pub specular: bool,
+    /// Shadow rays are traced.
     pub shadows: bool,
 }
 
 impl Terms {
+    /// The terms of a stage (`None`: all).
     pub fn of(stage: Option<Stage>) -> Terms {
         use Stage::*;
         Terms {
@@ -65,14 +72,18 @@ impl Terms {
 
 /// A scene ready to render: flattened geometry, its BVH, the offset `eps`.
 pub struct World {
+    /// The scene.
     pub scene: Scene,
+    /// Its triangles flattened, with shading attributes.
     pub geometry: Geometry,
+    /// The BVH over them.
     pub accel: Accel,
     /// `1e-5 L`, `L` the scene bounding-box diagonal (secondary-ray origin offset).
     pub eps: f32,
 }
 
 impl World {
+    /// Flatten `scene` and build its BVH.
     pub fn new(scene: Scene) -> World {
         let geometry = scene.geometry();
         let tris: Vec<[Vec3; 3]> = (0..geometry.triangles.len() as u32)

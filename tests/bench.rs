@@ -131,12 +131,20 @@ fn small_mesh_workloads() {
     for ((_, a), (_, b)) in work.sets().into_iter().zip(again.sets()) {
         assert_eq!(bench::ray_hash(a), bench::ray_hash(b));
     }
-    // scalar and packet agree on every set, and the counts are consistent
+    // every engine agrees with the scalar reference on every set, and the counts are consistent
     let m = bench::measure(&accel, &work, 1, 1);
-    assert_eq!(m.len(), 8);
-    for pair in m.chunks(2) {
-        assert_eq!(pair[0].workload, pair[1].workload);
-        assert_eq!(pair[0].results, pair[1].results, "{:?}", pair[0].workload);
+    let engines = bench::Engine::ALL.len();
+    assert_eq!(m.len(), 4 * engines);
+    for set in m.chunks(engines) {
+        for other in &set[1..] {
+            assert_eq!(set[0].workload, other.workload);
+            assert_eq!(set[0].engine, bench::Engine::Scalar);
+            assert_eq!(
+                set[0].results, other.results,
+                "{:?} {:?}",
+                other.workload, other.engine
+            );
+        }
     }
     assert_eq!(m[0].results.count(), hits.len());
     let m2 = bench::measure(&accel, &work, 2, 1);

@@ -612,3 +612,265 @@ fn info_image_scene_and_cubemap() {
     assert_eq!(v["objects"].as_array().unwrap().len(), 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+// ------------------------------------------------------------------ errors that point at the cause
+
+/// A scene with holes: the background (`{BG}`, line 9), the colour source of material `m`
+/// (`{OD}`, line 12) and the source of the second mesh (`{MESH}`, line 22); the first mesh is
+/// a cube of material `plain`.
+const REF_SCENE: &str = "[image]\nwidth = 8\nheight = 6\n[camera]\neye = [0, 0, 4]\nlook_at = [0, 0, 0]\nvfov = 40\n\
+[background]\n{BG}\n\
+[[material]]\nname = \"m\"\n{OD}\nka = 0.1\nkd = 0.9\nks = 0\nn = 1\n\
+[[mesh]]\nmaterial = \"plain\"\nshape = \"cube\"\n[[mesh]]\nmaterial = \"m\"\n{MESH}\n\
+[[material]]\nname = \"plain\"\ncolor = [1, 1, 1]\nka = 0\nkd = 1\nks = 0\nn = 1\n";
+
+/// A temporary folder holding `files` (name, bytes; a name ending in `/` is a folder).
+fn scene_dir(tag: &str, files: &[(&str, &[u8])]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("whitted-ref-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, bytes) in files {
+        let p = dir.join(name);
+        if name.ends_with('/') {
+            std::fs::create_dir_all(&p).unwrap();
+        } else {
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            std::fs::write(&p, bytes).unwrap();
+        }
+    }
+    dir
+}
+
+/// `REF_SCENE` with its holes filled, written as `dir/scene.toml` and built.
+fn build_ref(
+    dir: &Path,
+    bg: &str,
+    od: &str,
+    mesh: &str,
+) -> whitted::Result<(whitted::scene::Scene, Vec<String>)> {
+    use whitted::io::scene_file::{SceneFile, SearchPath, build_scene};
+    let text = REF_SCENE
+        .replace("{BG}", bg)
+        .replace("{OD}", od)
+        .replace("{MESH}", mesh);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let file = SceneFile::load(&path)?;
+    build_scene(&file, &path, &SearchPath::for_scene(Some(dir)))
+}
+
+const COLOR_BG: &str = "color = [0, 0, 0]";
+const COLOR_OD: &str = "color = [1, 1, 1]";
+
+/// Errors in a file a scene names: the scene, the line of the key, the key, then the file's
+/// own location and message (the six cases the hostile corpus found naming only the file).
+#[test]
+fn errors_in_referenced_files_name_scene_key_and_file() {
+    let faces: Vec<(&str, &[u8])> = whitted::texture::CUBE_FACES
+        .iter()
+        .filter(|f| **f != "negy")
+        .map(|f| (*f, &b""[..]))
+        .collect();
+    let png = {
+        let d = scene_dir("png", &[]);
+        let p = d.join("t.png");
+        whitted::io::image::save_image(&whitted::image::Image::new(4, 4), &p).unwrap();
+        std::fs::read(p).unwrap()
+    };
+    let mut files: Vec<(String, Vec<u8>)> = vec![
+        (
+            "meshes/bad.m".into(),
+            b"Vertex 1 0 0 0\nVertex 2 NaN 0 0\n".to_vec(),
+        ),
+        ("meshes/shape.stl".into(), b"solid x\n".to_vec()),
+        ("meshes/folder.m/".into(), vec![]),
+        ("tex/folder.png/".into(), vec![]),
+        ("sky/".into(), vec![]),
+    ];
+    for (f, _) in &faces {
+        files.push((format!("sky/{f}.png"), png.clone()));
+    }
+    let refs: Vec<(&str, &[u8])> = files
+        .iter()
+        .map(|(n, b)| (n.as_str(), b.as_slice()))
+        .collect();
+    let dir = scene_dir("files", &refs);
+    let scene = dir.join("scene.toml");
+    let s = scene.display().to_string();
+    let d = dir.display().to_string();
+    let cases = [
+        (
+            COLOR_BG,
+            COLOR_OD,
+            "file = \"meshes/bad.m\"",
+            format!(
+                "{s}:22: mesh[1].file: {d}/meshes/bad.m:2: Vertex 2: 'NaN' is not a finite number"
+            ),
+        ),
+        (
+            COLOR_BG,
+            COLOR_OD,
+            "file = \"meshes/shape.stl\"",
+            format!(
+                "{s}:22: mesh[1].file: {d}/meshes/shape.stl: unknown mesh format '.stl'; mesh files are .m, .obj, .ply"
+            ),
+        ),
+        (
+            COLOR_BG,
+            COLOR_OD,
+            "file = \"meshes/folder.m\"",
+            format!("{s}:22: mesh[1].file: {d}/meshes/folder.m: is a folder, not a regular file"),
+        ),
+        (
+            COLOR_BG,
+            "texture = \"tex/folder.png\"",
+            "file = \"meshes/bad.m\"",
+            format!(
+                "{s}:12: material[0] 'm'.texture: {d}/tex/folder.png: is a folder, not a regular file"
+            ),
+        ),
+        (
+            COLOR_BG,
+            "texture = \"/dev/zero\"",
+            "file = \"meshes/bad.m\"",
+            format!(
+                "{s}:12: material[0] 'm'.texture: /dev/zero: not a regular file (a device, FIFO or socket)"
+            ),
+        ),
+        (
+            "cubemap = \"sky\"",
+            COLOR_OD,
+            "file = \"meshes/bad.m\"",
+            format!("{s}:9: background.cubemap: {d}/sky: cube-map face negy missing"),
+        ),
+    ];
+    for (bg, od, mesh, want) in cases {
+        let e = build_ref(&dir, bg, od, mesh).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.starts_with(&want), "want {want:?}\n got {msg:?}");
+        assert!(!msg.contains('\n') && !msg.contains(":0:"), "{msg}");
+        assert!(matches!(e, Error::Referenced { .. }), "{e:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A name found nowhere lists every folder searched, the project's own data last.
+#[test]
+fn missing_file_lists_every_folder_searched() {
+    let dir = scene_dir("missing", &[]);
+    let e = build_ref(&dir, COLOR_BG, COLOR_OD, "file = \"meshes/nope.m\"")
+        .unwrap_err()
+        .to_string();
+    let cwd = std::env::current_dir().unwrap();
+    let want = format!(
+        "{}:22: mesh[1].file: cannot find 'meshes/nope.m'; searched: {}, {}",
+        dir.join("scene.toml").display(),
+        dir.display(),
+        cwd.display()
+    );
+    assert!(e.starts_with(&want), "want {want:?}\n got {e:?}");
+    assert!(
+        e.ends_with(whitted::io::scene_file::PROJECT_DATA),
+        "the project's data folder ends the search path: {e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `.m` files where only some vertices carry uv, rgb or normal load with one warning; in a
+/// scene, the vertices without rgb take the material's colour (`color` beside `vertex_color`,
+/// white without one) and the ones without uv (0, 0).
+#[test]
+fn partial_vertex_attributes_load_and_take_the_materials_colour() {
+    let partial = b"Vertex 1 0 0 0 {rgb=(1 0 0) uv=(0.5 0.5)}\nVertex 2 1 0 0 {rgb=(0 1 0)}\n\
+        Vertex 3 0 1 0 {normal=(0 0 1)}\nFace 1 1 2 3\n";
+    let dir = scene_dir("partial", &[("p.m", partial)]);
+    for (od, fill) in [
+        (
+            "vertex_color = true\ncolor = [0.2, 0.3, 0.4]",
+            [0.2, 0.3, 0.4],
+        ),
+        ("vertex_color = true", [1.0; 3]),
+    ] {
+        let (scene, warnings) = build_ref(&dir, COLOR_BG, od, "file = \"p.m\"").unwrap();
+        let w: Vec<_> = warnings.iter().filter(|w| w.contains("p.m")).collect();
+        assert_eq!(w.len(), 1, "one warning: {warnings:?}");
+        for want in [
+            "1 of 3 have no rgb",
+            "2 of 3 have no uv",
+            "2 of 3 have no normal",
+        ] {
+            assert!(w[0].contains(want), "{want}: {}", w[0]);
+        }
+        let colors = scene.objects[1].mesh.colors.as_ref().unwrap();
+        assert_eq!(colors[0], glam::Vec3::X);
+        assert_eq!(colors[2], glam::Vec3::from(fill), "{od}");
+        assert_eq!(
+            scene.objects[1].mesh.uvs.as_ref().unwrap()[1],
+            glam::Vec2::ZERO
+        );
+    }
+    // A colour beside a texture or checker is still refused: one source of Od each.
+    let e = build_ref(
+        &dir,
+        COLOR_BG,
+        "color = [1, 1, 1]\nchecker = { squares = 2, a = [0, 0, 0], b = [1, 1, 1] }",
+        "file = \"p.m\"",
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("give exactly one of color"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A generated shape's triangle count is known from its parameters: 3,719 spheres (9,024
+/// triangles each, 33.6M together, over the 2^25 cap) are refused before the first is made.
+/// The proof: the entry before them names a missing file, which would fail first if meshes
+/// were built one by one before the caps were checked.
+#[test]
+fn caps_are_checked_before_generating_shapes() {
+    use whitted::io::scene_file::MAX_SCENE_TRIANGLES;
+    use whitted::scene::shapes::sphere_triangle_count;
+    let per = sphere_triangle_count(whitted::io::scene_file::SPHERE_SEGMENTS);
+    assert_eq!(per, 9024);
+    assert!(3719 * per > MAX_SCENE_TRIANGLES && 3718 * per <= MAX_SCENE_TRIANGLES);
+    let sphere = "[[mesh]]\nmaterial = \"m\"\nshape = \"sphere\"\n";
+    let text = format!(
+        "{}{}",
+        REF_SCENE
+            .replace("{BG}", COLOR_BG)
+            .replace("{OD}", COLOR_OD)
+            .replace("{MESH}", "file = \"meshes/not-there.m\""),
+        sphere.repeat(3719)
+    );
+    assert!(text.len() > 100_000);
+    let e = scene_err(&text);
+    assert!(
+        e.starts_with("fuzz.toml: mesh[3720]: the scene's meshes add up to over 33554432"),
+        "{e}"
+    );
+    // The subdivision budget, too: 2^20 triangles made by subdividing, from the parameters.
+    let text = REF_SCENE
+        .replace("{BG}", COLOR_BG)
+        .replace("{OD}", COLOR_OD)
+        .replace("{MESH}", "shape = \"sphere\"\nsubdivide = 6")
+        .replace("shape = \"cube\"", "file = \"meshes/not-there.m\"");
+    let e = scene_err(&text);
+    assert!(
+        e.contains("mesh[1].subdivide: 6 levels would make 36962304 triangles"),
+        "{e}"
+    );
+}
+
+/// `whitted info` on a file type it does not read says which types it does.
+#[test]
+fn info_on_an_unknown_file_type_lists_the_types() {
+    // (.ply was the unknown type here until issue 12 made PLY a mesh format.)
+    let dir = scene_dir("info", &[("x.stl", b"solid x\nendsolid x\n")]);
+    let e = whitted::info::run(&dir.join("x.stl"), false)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("x.stl: not a file type whitted reads; it reads meshes (.m, .obj, .ply), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

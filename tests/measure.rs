@@ -9,6 +9,7 @@
 //! 2. camera packet shape: 4x2 pixel blocks against 8x1 rows.
 //! 3. the wavefront issue's speed criterion: `phong` at 3840x2160 on one thread, scalar
 //!    and packet engines alternately in the same run, best of 3 each, and their ratio.
+//! 4. the 8-wide tree: collapsed from the BVH2 against taken from obvhs's CWBVH.
 
 mod common;
 
@@ -133,4 +134,79 @@ fn engine_speed_4k_phong() {
         best[1],
         best[0] / best[1]
     );
+}
+
+/// The 8-wide tree collapsed from the BVH2 (`Bvh8::collapse`, what whitted uses) against the
+/// one taken from obvhs's CWBVH (`from_cwbvh`): build time of each path and the single-ray
+/// engine's throughput on the bench workloads, alternating, best of 3, one thread.
+#[test]
+#[ignore]
+fn wide_tree_collapse_against_cwbvh() {
+    use obvhs::{BvhBuildParams, aabb::Aabb, cwbvh::builder::build_cwbvh};
+    use whitted::bench::{Engine, Out, Packets, Workloads, pass, subdivide_like_peer, triangles};
+    let (kitten, _) = load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
+    for sub in [0, 2, 3] {
+        let mesh = subdivide_like_peer(&kitten, sub);
+        let tris = triangles(&mesh);
+        let aabbs: Vec<Aabb> = tris
+            .iter()
+            .map(|t| {
+                Aabb::new(
+                    t[0].min(t[1]).min(t[2]).into(),
+                    t[0].max(t[1]).max(t[2]).into(),
+                )
+            })
+            .collect();
+        let mut ours = Accel::build(&tris, BuildQuality::Medium);
+        let (mut collapse_ms, mut cw_ms) = (f64::MAX, f64::MAX);
+        let mut cw_tree = Default::default();
+        for _ in 0..3 {
+            let t = Instant::now();
+            ours.wide = whitted::accel::Bvh8::collapse(&ours);
+            collapse_ms = collapse_ms.min(t.elapsed().as_secs_f64() * 1e3);
+            let t = Instant::now();
+            let cw = build_cwbvh(
+                &aabbs,
+                BvhBuildParams::medium_build(),
+                &mut Default::default(),
+            );
+            cw_tree = whitted::accel::wide::from_cwbvh(&ours, &cw);
+            cw_ms = cw_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let mut theirs = ours.clone();
+        theirs.wide = cw_tree;
+        println!(
+            "kitten sub{sub} ({} triangles): BVH2 {:.1} ms + collapse {collapse_ms:.1} ms, {:.1} B/tri | CWBVH build + conversion {cw_ms:.1} ms, {:.1} B/tri",
+            tris.len(),
+            ours.build_time.as_secs_f64() * 1e3 - ours.collapse_time.as_secs_f64() * 1e3,
+            ours.wide.bytes() as f64 / tris.len() as f64,
+            theirs.wide.bytes() as f64 / tris.len() as f64,
+        );
+        let work = Workloads::generate(&mesh, &ours, 1920, 1080);
+        for (w, rays) in work.sets() {
+            let packets = Packets::new(rays);
+            let mut best = [f64::MAX; 2];
+            let mut results = vec![];
+            for _ in 0..3 {
+                for (k, a) in [&ours, &theirs].into_iter().enumerate() {
+                    let mut out = Out::new(Engine::Wide, w.any_hit(), rays);
+                    let t = Instant::now();
+                    pass(a, rays, &packets, &mut out, None);
+                    best[k] = best[k].min(t.elapsed().as_secs_f64());
+                    results.push(out.results(rays.len()));
+                }
+            }
+            assert!(
+                results.windows(2).all(|p| p[0] == p[1]),
+                "both trees give the same hits"
+            );
+            let m = |s: f64| rays.len() as f64 / s / 1e6;
+            println!(
+                "  {:<18} wide1 on collapse {:7.2} Mrays/s | on CWBVH {:7.2} Mrays/s",
+                w.name(),
+                m(best[0]),
+                m(best[1])
+            );
+        }
+    }
 }

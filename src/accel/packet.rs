@@ -73,7 +73,7 @@ pub fn hit_triangle8(
 /// Packet slab test: lanes of `active` whose ray meets the box within `[tnear, tfar]`, and
 /// their entry distances.
 #[inline(always)]
-fn hit_box8(
+pub(super) fn hit_box8(
     node: &super::Node,
     o: &Vec3x8,
     inv: &Vec3x8,

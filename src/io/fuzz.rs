@@ -102,7 +102,7 @@ pub fn image(data: &[u8]) -> Result<()> {
 /// Separates the six faces in a cube-map fuzz input.
 pub const FACE_SEPARATOR: &[u8] = b"--face--";
 
-/// A cube map from six face files: the first byte picks the extension (as for [`image`]),
+/// A cube map from six face files: the first byte picks the extension (as for [`image`](fn@image)),
 /// the rest is split on [`FACE_SEPARATOR`] into posx, negx, posy, negy, posz, negz. Faces
 /// over [`FUZZ_MAX_PIXELS`] are refused.
 pub fn cubemap(data: &[u8]) -> Result<()> {

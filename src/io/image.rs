@@ -10,11 +10,18 @@ use std::path::{Path, PathBuf};
 /// 2^25, e.g. 8192 x 4096; such a texture takes 400 MB as linear f32 RGB.
 pub const MAX_TEXTURE_PIXELS: u64 = 1 << 25;
 
+/// Image file extensions the texture loader reads, in lower case (it also recognises the
+/// formats by content).
+pub const IMAGE_EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "tga", "bmp", "hdr", "exr"];
+
 /// What a decoded image file was: its format, size and channel layout (for `whitted info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageInfo {
+    /// The decoder's name for the format (`png`, `jpeg`, `exr`, ...).
     pub format: String,
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
     /// Channels in the file (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; EXR: its channel count).
     pub channels: usize,
@@ -271,7 +278,7 @@ pub fn decode_cubemap_capped(
 }
 
 fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
-    for ext in ["png", "jpg", "jpeg", "tga", "bmp", "hdr", "exr"] {
+    for ext in IMAGE_EXTENSIONS {
         let p = dir.join(format!("{name}.{ext}"));
         if p.is_file() {
             return Ok(p);
@@ -283,28 +290,18 @@ fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
     ))
 }
 
-/// Write a render: `.exr` as linear 32-bit float RGB, `.png` clamped and sRGB-encoded 8-bit.
+/// Write a render: `.exr` as linear float RGB (PIZ-compressed 32-bit, see
+/// [`crate::io::output`]), `.png` clamped and sRGB-encoded 8-bit; through a temporary file, so
+/// a failed write leaves what `path` held.
 pub fn save_image(image: &Image, path: &Path) -> Result<()> {
-    let ext = crate::io::extension(path);
-    match ext.as_str() {
-        "exr" => exr::prelude::write_rgb_file(path, image.width, image.height, |x, y| {
-            let p = image.get(x, y);
-            (p.x, p.y, p.z)
-        })
-        .map_err(|e| Error::image(path, format!("cannot write EXR: {e}"))),
-        "png" => image::save_buffer(
-            path,
-            &image.to_srgb8(),
-            image.width as u32,
-            image.height as u32,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| Error::image(path, format!("cannot write PNG: {e}"))),
-        _ => Err(Error::Usage(format!(
-            "{}: unknown output format (use .png or .exr)",
-            path.display()
-        ))),
-    }
+    let (w, h) = (image.width as u32, image.height as u32);
+    crate::io::output::write_streamed(
+        path,
+        (w, h),
+        crate::image::PixelBounds::full(w, h),
+        crate::io::output::ExrOptions::default(),
+        &mut |sink| sink(0, &image.pixels),
+    )
 }
 
 /// Read a linear RGB EXR back (for tests and comparisons).

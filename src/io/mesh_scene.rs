@@ -108,6 +108,7 @@ pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile
             file: Some(file),
             ..Default::default()
         }],
+        lines: Default::default(),
     };
     Ok((scene, warnings))
 }

@@ -6,6 +6,11 @@
 //! Refused with file and line: missing or extra coordinates, NaN / inf / out-of-range numbers,
 //! undefined or duplicate vertex ids, ids <= 0, malformed attribute tuples, unbalanced braces,
 //! binary data, no faces.
+//!
+//! Files where only some vertices carry `uv=`, `rgb=` or `normal=` exist in the wild: they load,
+//! with one warning that counts the gaps. A missing uv is (0, 0); a missing normal is the
+//! area-weighted one; a missing rgb is the material's colour, filled in by the scene (see
+//! [`MRead::missing_rgb`]; white when the mesh is loaded on its own).
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -21,6 +26,20 @@ struct VertexAttrs {
     rgb: Option<Vec3>,
 }
 
+/// A parsed `.m` file and what it left out.
+#[derive(Clone, Debug)]
+pub struct MRead {
+    /// The mesh; attributes some vertices lacked are filled in (see the module doc).
+    pub mesh: Mesh,
+    /// Gaps in the attributes, degenerate faces, ...
+    pub warnings: Vec<String>,
+    /// Whether the file gave (some) vertex normals; otherwise they were all computed.
+    pub file_normals: bool,
+    /// Vertices with no `rgb=` in a file where others have one (their colour is white here;
+    /// a scene gives them the material's colour). Empty when every vertex or none has rgb.
+    pub missing_rgb: Vec<u32>,
+}
+
 /// Read and parse a `.m` file. Warnings (degenerate faces, ...) are returned beside the mesh.
 pub fn load_m(path: &Path) -> Result<(Mesh, Vec<String>)> {
     let bytes = super::read_regular(path)?;
@@ -34,6 +53,11 @@ pub fn parse_m(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
 
 /// [`parse_m`], also telling whether the file gave vertex normals (otherwise they were computed).
 pub fn parse_m_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
+    read_m(bytes, path).map(|r| (r.mesh, r.warnings, r.file_normals))
+}
+
+/// Parse `.m` text into an [`MRead`]; `path` is only used in messages.
+pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let err = |line: usize, msg: String| Error::parse(path, line, msg);
 
@@ -132,26 +156,45 @@ pub fn parse_m_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, b
     }
 
     let mut warnings = Vec::new();
-    let normals = if attrs.iter().all(|(a, _)| a.normal.is_some()) {
-        Some(attrs.iter().map(|(a, _)| a.normal.unwrap()).collect())
-    } else if attrs.iter().any(|(a, _)| a.normal.is_some()) {
-        // Mixed: keep the given normals, fill the missing ones with area-weighted normals below.
+    // An attribute on some vertices only: the others get `fill` (and are counted).
+    let n = attrs.len();
+    let mut gaps = Vec::new();
+    let uvs = partial(
+        &attrs,
+        |a| a.uv,
+        Vec2::ZERO,
+        "uv (set to (0, 0))",
+        &mut gaps,
+    );
+    let colors = partial(
+        &attrs,
+        |a| a.rgb,
+        Vec3::ONE,
+        "rgb (the material's colour)",
+        &mut gaps,
+    );
+    // A zero normal is replaced by the area-weighted one in `ensure_normals` below.
+    let normals = partial(
+        &attrs,
+        |a| a.normal,
+        Vec3::ZERO,
+        "normal (area-weighted)",
+        &mut gaps,
+    );
+    if !gaps.is_empty() {
         warnings.push(format!(
-            "{}: some vertices have no normal; computing those",
-            path.display()
+            "{}: some vertices lack attributes others have: {}",
+            path.display(),
+            gaps.join(", ")
         ));
-        Some(
-            attrs
-                .iter()
-                .map(|(a, _)| a.normal.unwrap_or(Vec3::ZERO))
-                .collect(),
-        )
-    } else {
-        None
+    }
+    let missing_rgb: Vec<u32> = match colors {
+        Some(_) => (0..n as u32)
+            .filter(|&i| attrs[i as usize].0.rgb.is_none())
+            .collect(),
+        None => Vec::new(),
     };
     let file_normals = normals.is_some();
-    let uvs = all_or_none(&attrs, |a| a.uv, "uv", path)?;
-    let colors = all_or_none(&attrs, |a| a.rgb, "rgb", path)?;
     let mut mesh = Mesh {
         positions,
         triangles,
@@ -167,32 +210,35 @@ pub fn parse_m_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, b
             path.display()
         ));
     }
-    Ok((mesh, warnings, file_normals))
+    Ok(MRead {
+        mesh,
+        warnings,
+        file_normals,
+        missing_rgb,
+    })
 }
 
-/// An attribute must be on every vertex or on none: a partial `uv` or `rgb` would render wrong.
-fn all_or_none<T: Copy>(
+/// One attribute per vertex when any vertex has it (`None` when none does): the vertices
+/// without it get `fill`, and a gap note (`2 of 5 have no uv ...`) is added to `gaps`.
+fn partial<T: Copy>(
     attrs: &[(VertexAttrs, usize)],
     get: impl Fn(&VertexAttrs) -> Option<T>,
-    key: &str,
-    path: &Path,
-) -> Result<Option<Vec<T>>> {
-    if !attrs.iter().any(|(a, _)| get(a).is_some()) {
-        return Ok(None);
+    fill: T,
+    what: &str,
+    gaps: &mut Vec<String>,
+) -> Option<Vec<T>> {
+    let given = attrs.iter().filter(|(a, _)| get(a).is_some()).count();
+    if given == 0 {
+        return None;
     }
-    attrs
-        .iter()
-        .map(|(a, line)| {
-            get(a).ok_or_else(|| {
-                Error::parse(
-                    path,
-                    *line,
-                    format!("vertex has no {key}=(..) but other vertices do"),
-                )
-            })
-        })
-        .collect::<Result<Vec<T>>>()
-        .map(Some)
+    if given < attrs.len() {
+        gaps.push(format!(
+            "{} of {} have no {what}",
+            attrs.len() - given,
+            attrs.len()
+        ));
+    }
+    Some(attrs.iter().map(|(a, _)| get(a).unwrap_or(fill)).collect())
 }
 
 /// Split `head {body}` into its parts; the body must be the last thing on the line.
@@ -383,11 +429,6 @@ mod tests {
             ("Vertex 1 0 0 0\nFace 1 1 1\n", ":2:", "at least 3"),
             ("Vertex 1 0 0 0\n", ":0:", "no faces"),
             ("\u{0}\u{1}binary", ":1:", "binary"),
-            (
-                "Vertex 1 0 0 0 {uv=(0 0)}\nVertex 2 1 0 0\nVertex 3 0 1 0\nFace 1 1 2 3\n",
-                ":2:",
-                "no uv",
-            ),
         ];
         for (text, line, what) in cases {
             let e = err_of(text);
@@ -400,6 +441,40 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("UTF-8"), "{e}");
+    }
+
+    /// Only some vertices carry uv, rgb or normal: the file loads, the gaps are filled (uv
+    /// (0, 0), rgb white and listed in `missing_rgb`, normal area-weighted) and one warning
+    /// counts each.
+    #[test]
+    fn partial_attributes_are_filled_with_one_warning() {
+        let text = "Vertex 1 0 0 0 {uv=(0.5 0.5) rgb=(1 0 0) normal=(1 0 0)}\nVertex 2 1 0 0 {rgb=(0 1 0)}\n\
+            Vertex 3 0 1 0\nVertex 4 1 1 0 {uv=(1 1)}\nFace 1 1 2 3\nFace 2 2 4 3\n";
+        let r = read_m(text.as_bytes(), Path::new("t.m")).unwrap();
+        assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+        let w = &r.warnings[0];
+        for want in [
+            "t.m:",
+            "2 of 4 have no uv (set to (0, 0))",
+            "2 of 4 have no rgb (the material's colour)",
+            "3 of 4 have no normal (area-weighted)",
+        ] {
+            assert!(w.contains(want), "want {want:?} in {w}");
+        }
+        let m = &r.mesh;
+        assert_eq!(
+            m.uvs.as_deref().unwrap(),
+            [Vec2::splat(0.5), Vec2::ZERO, Vec2::ZERO, Vec2::ONE]
+        );
+        assert_eq!(m.colors.as_ref().unwrap()[2], Vec3::ONE);
+        assert_eq!(r.missing_rgb, vec![2, 3]);
+        let normals = m.normals.as_ref().unwrap();
+        assert_eq!(normals[0], Vec3::X, "the file's normal is kept");
+        assert!(normals[1..].iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
+        assert!(r.file_normals);
+        // Complete files have no gaps and no warning.
+        let r = read_m(QUAD.as_bytes(), Path::new("t.m")).unwrap();
+        assert!(r.warnings.is_empty() && r.missing_rgb.is_empty());
     }
 
     #[test]

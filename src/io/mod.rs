@@ -1,12 +1,14 @@
-//! Reading and writing files: meshes (`.m`, `.obj`), scenes (TOML), images.
+//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`), scenes (TOML), images.
 
 pub mod aov;
 pub mod fuzz;
 pub mod image;
+pub mod merge;
 pub mod mesh_scene;
 pub mod mfile;
 pub mod mtl;
 pub mod obj;
+pub mod output;
 pub mod ply;
 pub mod rays;
 pub mod scene_file;
@@ -18,13 +20,22 @@ use std::path::Path;
 /// Largest file any loader reads (mesh, texture, scene): 4 GiB, checked before reading.
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
 
-/// Read a whole regular file. Devices, FIFOs and folders are refused before anything is read
-/// (`/dev/zero` would never end), and so is a file over [`MAX_FILE_BYTES`].
-pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
+/// Mesh file extensions the loaders read, in lower case (a mesh's format is its extension).
+pub const MESH_EXTENSIONS: [&str; 3] = ["m", "obj", "ply"];
+
+/// Check that `path` is a regular file under [`MAX_FILE_BYTES`], without reading it: folders,
+/// devices and FIFOs (`/dev/zero` would never end) are refused.
+pub fn check_regular(path: &Path) -> Result<()> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::Usage(format!(
+            "{}: is a folder, not a regular file",
+            path.display()
+        )));
+    }
     if !meta.is_file() {
         return Err(Error::Usage(format!(
-            "{}: not a regular file",
+            "{}: not a regular file (a device, FIFO or socket)",
             path.display()
         )));
     }
@@ -35,6 +46,12 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
             meta.len()
         )));
     }
+    Ok(())
+}
+
+/// Read a whole regular file, after [`check_regular`].
+pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
+    check_regular(path)?;
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
@@ -54,9 +71,6 @@ pub fn load_model(path: &Path) -> Result<(obj::Model, Vec<String>)> {
     }
 }
 
-/// The mesh formats [`load_mesh`] reads, by extension.
-pub const MESH_EXTENSIONS: [&str; 3] = ["m", "obj", "ply"];
-
 /// Load a mesh by extension (`.m`, `.obj` or `.ply`); warnings are returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
     load_mesh_detail(path).map(|(m, w, _)| (m, w))
@@ -64,19 +78,68 @@ pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
 
 /// [`load_mesh`], also telling whether the file gave vertex normals (otherwise computed).
 pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
+    // A folder or device is named as such before its extension is looked at.
+    check_regular(path)?;
     let parse = match extension(path).as_str() {
         "m" => mfile::parse_m_detail,
         "obj" => obj::parse_obj_detail,
         "ply" => ply::parse_ply_detail,
-        _ => {
-            return Err(Error::parse(
-                path,
-                0,
-                "unknown mesh format (use .m, .obj or .ply)",
-            ));
-        }
+        _ => return Err(unknown_mesh_type(path)),
     };
     parse(&read_regular(path)?, path)
+}
+
+/// A mesh for a scene: [`load_mesh`], also listing the vertices whose `rgb` the file left out
+/// where others have one (see [`mfile::MRead::missing_rgb`]); the scene colours them.
+pub fn load_scene_mesh(path: &Path) -> Result<(Mesh, Vec<String>, Vec<u32>)> {
+    if extension(path) == "m" {
+        let r = mfile::read_m(&read_regular(path)?, path)?;
+        return Ok((r.mesh, r.warnings, r.missing_rgb));
+    }
+    load_mesh(path).map(|(m, w)| (m, w, Vec::new()))
+}
+
+/// [`load_model`] for a scene: also the vertices a `.m` file left without `rgb` where others
+/// have one (see [`load_scene_mesh`]).
+pub fn load_scene_model(path: &Path) -> Result<(obj::Model, Vec<String>, Vec<u32>)> {
+    match extension(path).as_str() {
+        "obj" => obj::load_obj_model(path).map(|(m, w)| (m, w, Vec::new())),
+        _ => load_scene_mesh(path).map(|(mesh, w, missing)| {
+            (
+                obj::Model {
+                    mesh,
+                    ..Default::default()
+                },
+                w,
+                missing,
+            )
+        }),
+    }
+}
+
+/// The error for a mesh whose extension no loader reads; it lists the ones they do.
+pub fn unknown_mesh_type(path: &Path) -> Error {
+    let ext = extension(path);
+    Error::Format {
+        path: path.to_path_buf(),
+        msg: format!(
+            "{}; mesh files are {}",
+            if ext.is_empty() {
+                "no extension to tell the mesh format".to_string()
+            } else {
+                format!("unknown mesh format '.{ext}'")
+            },
+            list_extensions(&MESH_EXTENSIONS)
+        ),
+    }
+}
+
+/// `.m, .obj`: extensions as a user types them.
+pub fn list_extensions(exts: &[&str]) -> String {
+    exts.iter()
+        .map(|e| format!(".{e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// A file's extension in lower case (`""` when it has none): how every loader picks a format.

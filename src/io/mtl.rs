@@ -14,37 +14,58 @@ use std::path::Path;
 /// One `newmtl` block as written (absent statements are `None`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MtlMaterial {
+    /// Its `newmtl` name.
     pub name: String,
     /// File and line of its `newmtl`, for messages.
     pub origin: String,
+    /// `Ka`, ambient colour.
     pub ka: Option<[f32; 3]>,
+    /// `Kd`, diffuse colour.
     pub kd: Option<[f32; 3]>,
+    /// `Ks`, specular colour.
     pub ks: Option<[f32; 3]>,
+    /// `Ke`, emitted colour.
     pub ke: Option<[f32; 3]>,
+    /// `Tf`, transmission filter.
     pub tf: Option<[f32; 3]>,
+    /// `Ns`, specular exponent.
     pub ns: Option<f32>,
+    /// `Ni`, index of refraction.
     pub ni: Option<f32>,
     /// Dissolve (`d`, 1 = opaque), or `1 - Tr`.
     pub d: Option<f32>,
+    /// `illum`, the illumination model.
     pub illum: Option<u8>,
+    /// `map_Kd`, the diffuse texture file as written.
     pub map_kd: Option<String>,
 }
 
 /// What `whitted info` reports about one material.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct MtlInfo {
+    /// Its `newmtl` name.
     pub name: String,
+    /// `illum`, the illumination model.
     pub illum: Option<u8>,
+    /// `Ka`, ambient colour.
     pub ka: Option<[f32; 3]>,
+    /// `Kd`, diffuse colour.
     pub kd: Option<[f32; 3]>,
+    /// `Ks`, specular colour.
     pub ks: Option<[f32; 3]>,
+    /// `Ke`, emitted colour.
     pub ke: Option<[f32; 3]>,
+    /// `Tf`, transmission filter.
     pub tf: Option<[f32; 3]>,
+    /// `Ns`, specular exponent.
     pub ns: Option<f32>,
+    /// `Ni`, index of refraction.
     pub ni: Option<f32>,
+    /// Dissolve (`d`, 1 = opaque), or `1 - Tr`.
     pub d: Option<f32>,
     /// `map_Kd` as written and whether it was found (and used).
     pub map_kd: Option<String>,
+    /// Whether the `map_Kd` file was found (and used).
     pub map_kd_found: Option<bool>,
 }
 

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 /// A mesh with the materials its file brings.
 #[derive(Clone, Debug, Default)]
 pub struct Model {
+    /// Its triangles.
     pub mesh: Mesh,
     /// Materials of the file (MTL), already mapped onto whitted's terms.
     pub materials: Vec<MaterialDesc>,
@@ -31,6 +32,7 @@ pub struct Model {
 /// A triangle whose face group named no (known) material.
 pub const NO_MATERIAL: u32 = u32::MAX;
 
+/// Read and load an OBJ file ([`parse_obj`] on its bytes).
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
     let bytes = super::read_regular(path)?;
     parse_obj(&bytes, path)

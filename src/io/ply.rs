@@ -609,6 +609,7 @@ impl Body<'_> {
     }
 }
 
+/// Read and parse a `.ply` file (see [`parse_ply`]).
 pub fn load_ply(path: &Path) -> Result<(Mesh, Vec<String>)> {
     parse_ply(&super::read_regular(path)?, path)
 }

@@ -10,7 +10,9 @@ use crate::ray::{Hit, Ray};
 use glam::Vec3;
 use std::path::Path;
 
+/// Bytes of one ray record.
 pub const RAY_BYTES: usize = 32;
+/// Bytes of one hit record.
 pub const HIT_BYTES: usize = 16;
 
 /// Parse a ray file's bytes; the length must be a whole number of records.
@@ -39,6 +41,7 @@ pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
         .collect())
 }
 
+/// The bytes of a ray file holding `rays`.
 pub fn encode_rays(rays: &[Ray]) -> Vec<u8> {
     let mut out = Vec::with_capacity(rays.len() * RAY_BYTES);
     for r in rays {
@@ -51,6 +54,7 @@ pub fn encode_rays(rays: &[Ray]) -> Vec<u8> {
     out
 }
 
+/// The bytes of a hit file holding `hits` (`None` = a miss).
 pub fn encode_hits(hits: &[Option<Hit>]) -> Vec<u8> {
     let mut out = Vec::with_capacity(hits.len() * HIT_BYTES);
     for h in hits {
@@ -68,6 +72,7 @@ pub fn encode_hits(hits: &[Option<Hit>]) -> Vec<u8> {
     out
 }
 
+/// Parse a hit file's bytes; the length must be a whole number of records.
 pub fn parse_hits(bytes: &[u8], path: &Path) -> Result<Vec<Option<Hit>>> {
     if !bytes.len().is_multiple_of(HIT_BYTES) {
         return Err(Error::parse(

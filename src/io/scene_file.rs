@@ -5,7 +5,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{load_cubemap, load_texture};
-use crate::io::load_model;
+use crate::io::load_scene_model;
 use crate::io::obj::{Model, NO_MATERIAL};
 use crate::mesh::Mesh;
 use crate::scene::{Albedo, Background, Light, Material, Object, Scene, View, shapes};
@@ -31,38 +31,114 @@ pub const MAX_SCENE_TRIANGLES: u64 = 1 << 25;
 /// Most texels all `checker` materials of a scene may allocate together (2 of 4096 x 4096).
 pub const MAX_CHECKER_TEXELS: u64 = 1 << 25;
 
+/// A scene file as written: the TOML format of the README, before validation. [`build_scene`]
+/// turns it into a [`Scene`]; [`scenes::builtin`](crate::scenes::builtin) makes the built-in ones.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
+    /// `[image]`: the output size.
     pub image: ImageDesc,
+    /// `[camera]`: the pinhole camera.
     pub camera: CameraDesc,
+    /// `[render]`: depth, culling, ambient light (all optional).
     #[serde(default)]
     pub render: RenderDesc,
+    /// `[background]`: a colour or a cube map.
     pub background: BackgroundDesc,
+    /// `[[light]]`: point lights.
     #[serde(default, rename = "light")]
     pub lights: Vec<LightDesc>,
+    /// `[[material]]`: named materials.
     #[serde(default, rename = "material")]
     pub materials: Vec<MaterialDesc>,
+    /// `[[mesh]]`: meshes from files, inline triangles or generated shapes.
     #[serde(default, rename = "mesh")]
     pub meshes: Vec<MeshDesc>,
+    /// Lines of the keys in the text this was parsed from (empty for scenes made in code).
+    #[serde(skip)]
+    pub lines: KeyLines,
 }
 
+/// The 1-based line of each key of a scene file's text, by its path (`background.cubemap`,
+/// `mesh[1].file`), so that errors about the files a key names can point at the key. Source
+/// positions are not part of a scene's value: any two `KeyLines` compare equal.
+#[derive(Clone, Debug, Default)]
+pub struct KeyLines(Vec<(String, usize)>);
+
+impl PartialEq for KeyLines {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl KeyLines {
+    /// Read the key positions of TOML text (empty when it does not parse).
+    pub fn of(text: &str) -> KeyLines {
+        use toml::de::{DeTable, DeValue};
+        let mut out = Vec::new();
+        let Ok(doc) = DeTable::parse(text) else {
+            return KeyLines(out);
+        };
+        // Newline offsets, found once: a line is a binary search (a scene of thousands of
+        // entries would otherwise rescan its text per key).
+        let newlines: Vec<usize> = text
+            .bytes()
+            .enumerate()
+            .filter_map(|(i, b)| (b == b'\n').then_some(i))
+            .collect();
+        let line = |at: usize| newlines.partition_point(|&n| n < at) + 1;
+        let table = |prefix: String, t: &DeTable, out: &mut Vec<(String, usize)>| {
+            for (k, _) in t.iter() {
+                out.push((format!("{prefix}.{}", k.get_ref()), line(k.span().start)));
+            }
+        };
+        for (k, v) in doc.get_ref().iter() {
+            let name = k.get_ref().to_string();
+            match v.get_ref() {
+                DeValue::Table(t) => table(name, t, &mut out),
+                DeValue::Array(items) => {
+                    for (i, item) in items.into_iter().enumerate() {
+                        if let DeValue::Table(t) = item.get_ref() {
+                            table(format!("{name}[{i}]"), t, &mut out);
+                        }
+                    }
+                }
+                _ => out.push((name, line(k.span().start))),
+            }
+        }
+        KeyLines(out)
+    }
+
+    /// The line of `key` (as `mesh[1].file`), if the text had it.
+    pub fn line(&self, key: &str) -> Option<usize> {
+        self.0.iter().find(|(k, _)| k == key).map(|&(_, l)| l)
+    }
+}
+
+/// `[image]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ImageDesc {
+    /// Pixels across (the image must have at most `MAX_PIXELS`).
     pub width: u64,
+    /// Pixels down.
     pub height: u64,
 }
 
+/// `[camera]` (SCENES.md §1).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    /// The eye point.
     #[serde(deserialize_with = "exact3::de")]
     pub eye: [f32; 3],
+    /// The point looked at.
     #[serde(deserialize_with = "exact3::de")]
     pub look_at: [f32; 3],
+    /// The up direction (default +y); must not be parallel to the view direction.
     #[serde(default = "default_up", deserialize_with = "exact3::de")]
     pub up: [f32; 3],
+    /// Vertical field of view in degrees, in (0, 180).
     pub vfov: f32,
 }
 
@@ -100,13 +176,17 @@ fn default_up() -> [f32; 3] {
     [0.0, 1.0, 0.0]
 }
 
+/// `[render]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RenderDesc {
+    /// Reflection / refraction bounces (default 1, at most `MAX_DEPTH`).
     #[serde(default = "default_depth")]
     pub depth: u32,
+    /// Skip back faces, for every ray (default true).
     #[serde(default = "default_true")]
     pub cull_backfaces: bool,
+    /// Ambient light `Ia` (default black).
     #[serde(default, deserialize_with = "exact3::de")]
     pub ambient: [f32; 3],
 }
@@ -131,9 +211,11 @@ fn is_true(v: &bool) -> bool {
     *v
 }
 
+/// `[background]`: exactly one of `color` or `cubemap`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundDesc {
+    /// A constant colour (linear RGB).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -145,18 +227,23 @@ pub struct BackgroundDesc {
     pub cubemap: Option<String>,
 }
 
+/// `[[light]]`: a point light.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
+    /// Where it is.
     #[serde(deserialize_with = "exact3::de")]
     pub position: [f32; 3],
+    /// Its RGB intensity `Ip` (>= 0).
     #[serde(deserialize_with = "exact3::de")]
     pub intensity: [f32; 3],
 }
 
+/// `[[material]]`: Whitted's coefficients and where `Od` comes from.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
+    /// The name meshes refer to it by (unique).
     pub name: String,
     /// Exactly one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`.
     #[serde(
@@ -165,19 +252,28 @@ pub struct MaterialDesc {
         deserialize_with = "exact3::opt"
     )]
     pub color: Option<[f32; 3]>,
+    /// `Od` is the interpolated vertex `rgb` of the mesh; `color`, if also given, colours the
+    /// vertices of a `.m` file that gives only some of them an rgb (white without it).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub vertex_color: bool,
+    /// `Od` from an image file at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<String>,
+    /// `Od` from a procedural checker at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checker: Option<CheckerDesc>,
-    /// Coefficients: a number (the same in every channel) or `[r, g, b]`.
+    /// Ambient coefficient: a number (the same in every channel) or `[r, g, b]`.
     pub ka: Coef,
+    /// Diffuse coefficient (a number or `[r, g, b]`).
     pub kd: Coef,
+    /// Specular (and, unless `kr` is given, reflection) coefficient (a number or `[r, g, b]`).
     pub ks: Coef,
+    /// Phong exponent.
     pub n: f32,
+    /// Transmission coefficient (default 0; a number or `[r, g, b]`).
     #[serde(default, skip_serializing_if = "Coef::is_zero")]
     pub kt: Coef,
+    /// Index of refraction (default 1.5, > 0).
     #[serde(default = "default_ior")]
     pub ior: f32,
     /// Weight of the reflection ray; omitted = `ks` (Whitted's one coefficient for both).
@@ -186,6 +282,7 @@ pub struct MaterialDesc {
     /// Emitted colour: shown on the surface and, with `lamp` (default true), point lights.
     #[serde(default, skip_serializing_if = "Coef::is_zero")]
     pub ke: Coef,
+    /// Whether `ke` also lights the scene through point lights (default true).
     #[serde(default = "default_true", skip_serializing_if = "is_true")]
     pub lamp: bool,
 }
@@ -197,7 +294,9 @@ fn default_ior() -> f32 {
 /// A material coefficient: one number for all three channels, or an RGB triple.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Coef {
+    /// The same value in every channel.
     Scalar(f32),
+    /// One value per channel, `[r, g, b]`.
     Rgb([f32; 3]),
 }
 
@@ -214,12 +313,15 @@ impl From<f32> for Coef {
 }
 
 impl Coef {
+    /// The value per channel.
     pub fn rgb(self) -> [f32; 3] {
         match self {
             Coef::Scalar(v) => [v; 3],
             Coef::Rgb(c) => c,
         }
     }
+
+    /// Whether every channel is 0.
     pub fn is_zero(&self) -> bool {
         self.rgb() == [0.0; 3]
     }
@@ -276,16 +378,21 @@ impl<'de> Deserialize<'de> for Coef {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CheckerDesc {
+    /// Cells per side, in 1..=4096.
     pub squares: u32,
+    /// The colour of cell (0, 0)'s kind.
     #[serde(deserialize_with = "exact3::de")]
     pub a: [f32; 3],
+    /// The other colour.
     #[serde(deserialize_with = "exact3::de")]
     pub b: [f32; 3],
 }
 
+/// `[[mesh]]`: exactly one of `file`, `vertices` + `faces`, or `shape`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MeshDesc {
+    /// A name for messages and `whitted info` (default: the file name or `meshN`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// The scene material of the whole mesh. Omitted (files only): the file's own materials
@@ -303,6 +410,7 @@ pub struct MeshDesc {
         deserialize_with = "exact3::opt_vec"
     )]
     pub vertices: Option<Vec<[f32; 3]>>,
+    /// Triangles of the inline vertices (0-based indices).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -313,14 +421,17 @@ pub struct MeshDesc {
     /// (center, size; a horizontal square facing +y).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<String>,
+    /// Centre of a generated shape (default the origin).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
         deserialize_with = "exact3::opt"
     )]
     pub center: Option<[f32; 3]>,
+    /// Radius of a `sphere` (default 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<f32>,
+    /// Size of a `cube` (x, y, z) or a `quad` (x, z) (default 1).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -340,7 +451,7 @@ impl SceneFile {
     /// Parse TOML text; errors carry the line and column of the offending key.
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        toml::from_str(text).map_err(|e| {
+        let mut file: SceneFile = toml::from_str(text).map_err(|e| {
             let (line, col) = e
                 .span()
                 .map(|s| line_col(text.as_bytes(), s.start))
@@ -348,11 +459,17 @@ impl SceneFile {
             // toml's messages span several lines (a source excerpt); keep the first line.
             let msg = e.message().lines().next().unwrap_or("invalid TOML").trim();
             Error::parse(path, line, format!("column {col}: {msg}"))
-        })
+        })?;
+        file.lines = KeyLines::of(text);
+        Ok(file)
     }
 
-    /// Read and parse a scene file; bytes that are not UTF-8 are refused with their line.
+    /// Read and parse a scene file; bytes that are not UTF-8 are refused with their line. An
+    /// image given where a scene is expected is refused by its extension, with how to make a
+    /// scene for it (a mesh file is made a scene by
+    /// [`scene_for_mesh`](crate::io::mesh_scene::scene_for_mesh) instead).
     pub fn load(path: &Path) -> Result<SceneFile> {
+        not_a_scene(path)?;
         let bytes = crate::io::read_regular(path)?;
         let text = std::str::from_utf8(&bytes).map_err(|e| {
             let (line, col) = line_col(&bytes, e.valid_up_to());
@@ -361,6 +478,7 @@ impl SceneFile {
         SceneFile::parse(text, path)
     }
 
+    /// The scene as TOML text (what `whitted scene NAME` prints).
     pub fn to_toml(&self) -> String {
         toml::to_string(self).expect("scene serialises")
     }
@@ -461,7 +579,10 @@ impl SceneFile {
                 )
             })?;
         }
-        Ok(SceneFile::deserialize(root).expect("checked above"))
+        let mut file = SceneFile::deserialize(root).expect("checked above");
+        // Errors about the files the scene names still point at the lines of its text.
+        file.lines = self.lines.clone();
+        Ok(file)
     }
 }
 
@@ -485,6 +606,25 @@ pub fn overrides_named<'a>(message: &str, defs: &'a [String]) -> Vec<&'a str> {
         .collect()
 }
 
+/// Refuse an image given as a scene (TOML would call it `key with no value`). Meshes are not
+/// refused here: the CLI renders a mesh file given as the scene directly (see
+/// [`crate::io::mesh_scene`]) before any scene file is loaded.
+fn not_a_scene(path: &Path) -> Result<()> {
+    let ext = crate::io::extension(path);
+    if !crate::io::image::IMAGE_EXTENSIONS.contains(&ext.as_str()) {
+        return Ok(());
+    }
+    Err(Error::Format {
+        path: path.to_path_buf(),
+        msg: format!(
+            "this is an image (.{ext}), but a scene file (.toml) is expected; make one with \
+             `whitted scene phong > my.toml`, set a material's texture to \"{}\", then \
+             `whitted render my.toml`",
+            path.display()
+        ),
+    })
+}
+
 /// 1-based (line, column in characters) of byte offset `at`, clamped to the text.
 fn line_col(text: &[u8], at: usize) -> (usize, usize) {
     let before = &text[..at.min(text.len())];
@@ -502,14 +642,22 @@ fn line_col(text: &[u8], at: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// The project's own data folder (holding the shipped `meshes/` and `textures/`), fixed at
+/// compile time: the last folder of every [`SearchPath::for_scene`], so the built-in scenes
+/// work from any working directory with no environment variable, also after `cargo install
+/// --path .` (as long as the source folder stays where it was built).
+pub const PROJECT_DATA: &str = env!("CARGO_MANIFEST_DIR");
+
 /// Where scene files look for meshes and images.
 #[derive(Clone, Debug, Default)]
 pub struct SearchPath {
+    /// Folders tried in order; the first that holds the name wins.
     pub dirs: Vec<PathBuf>,
 }
 
 impl SearchPath {
-    /// The scene's folder (if any), the current folder, then `WHITTED_ASSETS` folders.
+    /// The scene's folder (if any), the current folder, the `WHITTED_ASSETS` folders, then
+    /// the project's own data ([`PROJECT_DATA`]). A folder listed twice is tried once.
     pub fn for_scene(scene_dir: Option<&Path>) -> Self {
         let mut dirs = Vec::new();
         if let Some(d) = scene_dir {
@@ -523,18 +671,25 @@ impl SearchPath {
         if let Some(list) = std::env::var_os("WHITTED_ASSETS") {
             dirs.extend(std::env::split_paths(&list).filter(|p| !p.as_os_str().is_empty()));
         }
-        SearchPath { dirs }
+        dirs.push(PathBuf::from(PROJECT_DATA));
+        let mut unique: Vec<PathBuf> = Vec::with_capacity(dirs.len());
+        for d in dirs {
+            if !unique.iter().any(|u| same_dir(u, &d)) {
+                unique.push(d);
+            }
+        }
+        SearchPath { dirs: unique }
     }
 
-    /// The first existing `dir/name`; an absolute `name` is used as it is.
-    pub fn resolve(&self, name: &str, scene: &Path) -> Result<PathBuf> {
+    /// The first existing `dir/name`; an absolute `name` is used as it is. The error lists
+    /// every folder searched.
+    pub fn resolve(&self, name: &str) -> Result<PathBuf> {
         let p = Path::new(name);
         if p.is_absolute() {
             return if p.exists() {
                 Ok(p.to_path_buf())
             } else {
                 Err(Error::NotFound {
-                    scene: scene.to_path_buf(),
                     name: name.into(),
                     searched: vec![p.parent().unwrap_or(p).to_path_buf()],
                 })
@@ -542,14 +697,29 @@ impl SearchPath {
         }
         self.dirs
             .iter()
-            .map(|d| d.join(p))
+            // `./meshes/x.m` reads better in messages as `meshes/x.m`.
+            .map(|d| {
+                if d == Path::new(".") {
+                    p.to_path_buf()
+                } else {
+                    d.join(p)
+                }
+            })
             .find(|c| c.exists())
             .ok_or_else(|| Error::NotFound {
-                scene: scene.to_path_buf(),
                 name: name.into(),
                 searched: self.dirs.clone(),
             })
     }
+}
+
+/// Two spellings of one folder (`.` and the current folder, a trailing `/`, a symlink).
+fn same_dir(a: &Path, b: &Path) -> bool {
+    a == b
+        || matches!(
+            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+            (Ok(x), Ok(y)) if x == y
+        )
 }
 
 fn finite3(v: [f32; 3], key: &str, path: &Path) -> Result<Vec3> {
@@ -658,9 +828,12 @@ pub fn build_scene(
 
     let background = match (&file.background.color, &file.background.cubemap) {
         (Some(col), None) => Background::Color(nonneg3(*col, "background.color", path)?),
-        (None, Some(dir)) => {
-            Background::CubeMap(Arc::new(load_cubemap(&search.resolve(dir, path)?)?))
-        }
+        (None, Some(dir)) => Background::CubeMap(Arc::new(
+            search
+                .resolve(dir)
+                .and_then(|d| load_cubemap(&d))
+                .map_err(|e| referenced(file, path, "background.cubemap", None, e))?,
+        )),
         _ => {
             return Err(Error::scene(
                 path,
@@ -678,6 +851,7 @@ pub fn build_scene(
     }
 
     let mut materials = Vec::new();
+    let mut vertex_fill = Vec::new();
     // One texture per file, however many materials use it.
     let mut textures: Vec<(PathBuf, Arc<Texture>)> = Vec::new();
     // Checker textures are allocated below: their total size is checked before any is made.
@@ -703,14 +877,42 @@ pub fn build_scene(
             ));
         }
         let prefix = format!("material[{i}] '{}'", m.name);
-        materials.push(build_material(m, &prefix, path, search, &mut textures)?);
+        let refer = |e| {
+            let toml_key = format!("material[{i}].texture");
+            referenced(file, path, &toml_key, Some(format!("{prefix}.texture")), e)
+        };
+        materials.push(build_material(
+            m,
+            &prefix,
+            path,
+            search,
+            &mut textures,
+            &refer,
+        )?);
+        // The colour of vertices a mesh gives no rgb (white unless the material says).
+        vertex_fill.push(match m.color {
+            Some(c) if m.vertex_color => Vec3::from(c),
+            _ => Vec3::ONE,
+        });
+    }
+
+    // The caps first, from the parameters alone: inline and generated meshes know their
+    // triangle count before they are made, so a scene of 3,719 spheres is refused before the
+    // first sphere is allocated (file meshes are checked as each is read, below).
+    let (mut planned, mut planned_subdivided) = (0u64, 0u64);
+    for (i, d) in file.meshes.iter().enumerate() {
+        if let Some(n) = planned_triangles(d) {
+            let made = check_caps(i, d, n, planned, planned_subdivided, path)?;
+            planned += made;
+            planned_subdivided += if d.subdivide > 0 { made } else { 0 };
+        }
     }
 
     let mut objects = Vec::new();
     let mut total_triangles = 0u64;
     let mut subdivided_total = 0u64;
     // Each mesh file is read once, however many `[[mesh]]` entries name it.
-    let mut loaded: Vec<(PathBuf, Model)> = Vec::new();
+    let mut loaded: Vec<LoadedMesh> = Vec::new();
     for (i, d) in file.meshes.iter().enumerate() {
         let key = |k: &str| format!("mesh[{i}].{k}");
         if d.material.is_empty() && d.file.is_none() {
@@ -722,51 +924,58 @@ pub fn build_scene(
                 ),
             ));
         }
-        let (model, name) = mesh_of(d, i, path, search, &mut loaded, &mut warnings)?;
-        let (material, face_materials) = if d.material.is_empty() {
-            file_materials(&model, &name, path, search, &mut materials, &mut textures)?
+        let named = if d.material.is_empty() {
+            None
         } else {
-            let m = materials
-                .iter()
-                .position(|m| m.name == d.material)
-                .ok_or_else(|| {
-                    Error::scene(
-                        path,
-                        format!("{}: no material named '{}'", key("material"), d.material),
-                    )
-                })?;
-            (m, None)
+            Some(
+                materials
+                    .iter()
+                    .position(|m| m.name == d.material)
+                    .ok_or_else(|| {
+                        Error::scene(
+                            path,
+                            format!("{}: no material named '{}'", key("material"), d.material),
+                        )
+                    })?,
+            )
         };
-        let mesh = model.mesh;
-        if d.subdivide > MAX_SUBDIVIDE {
-            return Err(Error::scene(
+        // Checked with the entry's triangle count before its mesh is copied or generated.
+        let caps = |n| check_caps(i, d, n, total_triangles, subdivided_total, path);
+        let (model, name, missing_rgb) =
+            mesh_of(d, i, file, path, search, &mut loaded, &mut warnings, caps)?;
+        let (material, face_materials) = match named {
+            Some(m) => (m, None),
+            None => file_materials(
+                &model,
+                &name,
+                i,
+                file,
                 path,
-                format!(
-                    "{}: {} is over the cap of {MAX_SUBDIVIDE}",
-                    key("subdivide"),
-                    d.subdivide
-                ),
-            ));
-        }
-        let subdivided = (mesh.triangles.len() as u64).saturating_mul(1 << (2 * d.subdivide));
-        if d.subdivide > 0 {
-            subdivided_total += subdivided;
-        }
-        if subdivided_total > MAX_SUBDIVIDED_TRIANGLES {
-            return Err(Error::scene(
-                path,
-                format!(
-                    "{}: {} levels would make {subdivided} triangles, over the scene's cap of {MAX_SUBDIVIDED_TRIANGLES} made by subdivision",
-                    key("subdivide"),
-                    d.subdivide
-                ),
-            ));
+                search,
+                &mut materials,
+                &mut textures,
+            )?,
+        };
+        let mut mesh = model.mesh;
+        if let Albedo::VertexColor = materials[material].albedo
+            && let Some(colors) = &mut mesh.colors
+        {
+            // File materials (and the default) have no fill colour: white.
+            let fill = vertex_fill.get(material).copied().unwrap_or(Vec3::ONE);
+            for &v in &missing_rgb {
+                colors[v as usize] = fill;
+            }
         }
         let mesh = if d.subdivide > 0 {
             mesh.subdivide(d.subdivide)
         } else {
             mesh
         };
+        let made = mesh.triangles.len() as u64;
+        total_triangles += made;
+        if d.subdivide > 0 {
+            subdivided_total += made;
+        }
         // Subdivision makes 4 children per face, in order.
         let face_materials = face_materials.map(|f| {
             let n = 1usize << (2 * d.subdivide);
@@ -818,15 +1027,6 @@ pub fn build_scene(
                 }
                 _ => {}
             }
-        }
-        total_triangles += mesh.triangles.len() as u64;
-        if total_triangles > MAX_SCENE_TRIANGLES {
-            return Err(Error::scene(
-                path,
-                format!(
-                    "mesh[{i}]: the scene's meshes add up to over {MAX_SCENE_TRIANGLES} triangles (the cap)"
-                ),
-            ));
         }
         objects.push(Object {
             name,
@@ -890,9 +1090,11 @@ fn build_material(
     path: &Path,
     search: &SearchPath,
     textures: &mut Vec<(PathBuf, Arc<Texture>)>,
+    refer: &dyn Fn(Error) -> Error,
 ) -> Result<Material> {
     let key = |k: &str| format!("{prefix}.{k}");
-    let sources = m.color.is_some() as u32
+    // `color` beside `vertex_color` colours the vertices a mesh gives no rgb.
+    let sources = (m.color.is_some() && !m.vertex_color) as u32
         + m.vertex_color as u32
         + m.texture.is_some() as u32
         + m.checker.is_some() as u32;
@@ -900,22 +1102,26 @@ fn build_material(
         return Err(Error::scene(
             path,
             format!(
-                "{}: give exactly one of color, vertex_color, texture, checker",
+                "{}: give exactly one of color, vertex_color (with an optional color for vertices without rgb), texture, checker",
                 key("color")
             ),
         ));
     }
-    let albedo = if let Some(col) = m.color {
-        Albedo::Color(nonneg3(col, &key("color"), path)?)
-    } else if m.vertex_color {
+    let color = m
+        .color
+        .map(|c| nonneg3(c, &key("color"), path))
+        .transpose()?;
+    let albedo = if m.vertex_color {
         Albedo::VertexColor
+    } else if let Some(col) = color {
+        Albedo::Color(col)
     } else if let Some(t) = &m.texture {
-        let file = search.resolve(t, path)?;
-        match textures.iter().find(|(p, _)| *p == file) {
+        let found = search.resolve(t).map_err(refer)?;
+        match textures.iter().find(|(p, _)| *p == found) {
             Some((_, tex)) => Albedo::Texture(tex.clone()),
             None => {
-                let tex = Arc::new(load_texture(&file)?);
-                textures.push((file, tex.clone()));
+                let tex = Arc::new(load_texture(&found).map_err(refer)?);
+                textures.push((found, tex.clone()));
                 Albedo::Texture(tex)
             }
         }
@@ -963,14 +1169,104 @@ fn build_material(
     })
 }
 
+/// An error about a file the scene names: the scene, the line of `toml_key` (when the scene
+/// was read from text), the key as messages spell it (`shown`, default `toml_key`), then the
+/// file's own error.
+fn referenced(
+    file: &SceneFile,
+    path: &Path,
+    toml_key: &str,
+    shown: Option<String>,
+    source: Error,
+) -> Error {
+    Error::Referenced {
+        scene: path.to_path_buf(),
+        line: file.lines.line(toml_key),
+        key: shown.unwrap_or_else(|| toml_key.to_string()),
+        source: Box::new(source),
+    }
+}
+
+/// Segments of a generated `shape = "sphere"` (its triangle count is
+/// [`shapes::sphere_triangle_count`] of this).
+pub const SPHERE_SEGMENTS: u32 = 48;
+
+/// A mesh file as read once for a scene: where it was found, the mesh with the materials it
+/// brings, the vertices it gave no rgb.
+type LoadedMesh = (PathBuf, Model, Vec<u32>);
+
+/// Triangles an inline or generated mesh entry will have before subdivision, known from its
+/// parameters; `None` for files (known once read) and for entries that are not valid (their
+/// error comes when they are built).
+fn planned_triangles(d: &MeshDesc) -> Option<u64> {
+    if d.file.is_some() {
+        return None;
+    }
+    match (&d.faces, d.shape.as_deref()) {
+        (Some(f), None) => Some(f.len() as u64),
+        (None, Some("sphere")) => Some(shapes::sphere_triangle_count(SPHERE_SEGMENTS)),
+        (None, Some("cube")) => Some(12),
+        (None, Some("quad")) => Some(2),
+        _ => None,
+    }
+}
+
+/// Whether mesh entry `i` with `n` triangles (before its subdivision) fits the caps, given the
+/// scene's totals so far; returns the triangles it will make.
+fn check_caps(
+    i: usize,
+    d: &MeshDesc,
+    n: u64,
+    total: u64,
+    subdivided: u64,
+    path: &Path,
+) -> Result<u64> {
+    let key = |k: &str| format!("mesh[{i}].{k}");
+    if d.subdivide > MAX_SUBDIVIDE {
+        return Err(Error::scene(
+            path,
+            format!(
+                "{}: {} is over the cap of {MAX_SUBDIVIDE}",
+                key("subdivide"),
+                d.subdivide
+            ),
+        ));
+    }
+    let made = n.saturating_mul(1 << (2 * d.subdivide));
+    if d.subdivide > 0 && subdivided.saturating_add(made) > MAX_SUBDIVIDED_TRIANGLES {
+        return Err(Error::scene(
+            path,
+            format!(
+                "{}: {} levels would make {made} triangles, over the scene's cap of {MAX_SUBDIVIDED_TRIANGLES} made by subdivision",
+                key("subdivide"),
+                d.subdivide
+            ),
+        ));
+    }
+    if total.saturating_add(made) > MAX_SCENE_TRIANGLES {
+        return Err(Error::scene(
+            path,
+            format!(
+                "mesh[{i}]: the scene's meshes add up to over {MAX_SCENE_TRIANGLES} triangles (the cap) with this one's {made}"
+            ),
+        ));
+    }
+    Ok(made)
+}
+
+/// The mesh of entry `i`, its name and the vertices its file gave no rgb. `caps` is called
+/// with the triangle count before the mesh is copied or generated.
+#[allow(clippy::too_many_arguments)]
 fn mesh_of(
     d: &MeshDesc,
     i: usize,
+    file: &SceneFile,
     path: &Path,
     search: &SearchPath,
-    loaded: &mut Vec<(PathBuf, Model)>,
+    loaded: &mut Vec<LoadedMesh>,
     warnings: &mut Vec<String>,
-) -> Result<(Model, String)> {
+    caps: impl FnOnce(u64) -> Result<u64>,
+) -> Result<(Model, String, Vec<u32>)> {
     let key = |k: &str| format!("mesh[{i}].{k}");
     let sources = d.file.is_some() as u32 + d.vertices.is_some() as u32 + d.shape.is_some() as u32;
     if sources != 1 {
@@ -989,17 +1285,21 @@ fn mesh_of(
         ));
     }
     if let Some(f) = &d.file {
-        let file = search.resolve(f, path)?;
-        let model = match loaded.iter().find(|(p, _)| *p == file) {
-            Some((_, m)) => m.clone(),
+        let refer = |e| referenced(file, path, &key("file"), None, e);
+        let found = search.resolve(f).map_err(refer)?;
+        let k = match loaded.iter().position(|(p, ..)| *p == found) {
+            Some(k) => k,
             None => {
-                let (model, w) = load_model(&file)?;
+                let (model, w, missing) = load_scene_model(&found).map_err(refer)?;
                 warnings.extend(w);
-                loaded.push((file, model.clone()));
-                model
+                loaded.push((found, model, missing));
+                loaded.len() - 1
             }
         };
-        return Ok((model, d.name.clone().unwrap_or_else(|| f.clone())));
+        caps(loaded[k].1.mesh.triangles.len() as u64)?;
+        let (_, model, missing) = &loaded[k];
+        let name = d.name.clone().unwrap_or_else(|| f.clone());
+        return Ok((model.clone(), name, missing.clone()));
     }
     let name = d.name.clone().unwrap_or_else(|| format!("mesh{i}"));
     let center = finite3(d.center.unwrap_or([0.0; 3]), &key("center"), path)?;
@@ -1031,42 +1331,43 @@ fn mesh_of(
         if faces.is_empty() {
             return Err(Error::scene(path, format!("{}: no faces", key("faces"))));
         }
+        caps(faces.len() as u64)?;
         let mut mesh = Mesh {
             positions,
             triangles: faces.clone(),
             ..Default::default()
         };
         mesh.ensure_normals();
-        return Ok((plain(mesh), name));
+        return Ok((plain(mesh), name, Vec::new()));
     }
     let shape = d.shape.as_deref().unwrap_or_default();
     let size = finite3(d.size.unwrap_or([1.0; 3]), &key("size"), path)?;
-    let mut mesh = match shape {
-        "sphere" => {
-            let radius = d.radius.unwrap_or(1.0);
-            if !(radius.is_finite() && radius > 0.0) {
-                return Err(Error::scene(
-                    path,
-                    format!("{}: must be > 0", key("radius")),
-                ));
-            }
-            shapes::sphere(center, radius, 48)
-        }
-        "cube" => shapes::cube(center, size * 0.5),
-        "quad" => shapes::quad(center, Vec3::X * size.x * 0.5, Vec3::NEG_Z * size.z * 0.5),
-        other => {
-            return Err(Error::scene(
-                path,
-                format!(
-                    "{}: unknown shape '{other}' (sphere, cube, quad)",
-                    key("shape")
-                ),
-            ));
-        }
+    let radius = d.radius.unwrap_or(1.0);
+    if shape == "sphere" && !(radius.is_finite() && radius > 0.0) {
+        return Err(Error::scene(
+            path,
+            format!("{}: must be > 0", key("radius")),
+        ));
+    }
+    let Some(n) = planned_triangles(d) else {
+        return Err(Error::scene(
+            path,
+            format!(
+                "{}: unknown shape '{shape}' (sphere, cube, quad)",
+                key("shape")
+            ),
+        ));
     };
+    caps(n)?;
+    let mut mesh = match shape {
+        "sphere" => shapes::sphere(center, radius, SPHERE_SEGMENTS),
+        "cube" => shapes::cube(center, size * 0.5),
+        _ => shapes::quad(center, Vec3::X * size.x * 0.5, Vec3::NEG_Z * size.z * 0.5),
+    };
+    debug_assert_eq!(mesh.triangles.len() as u64, n, "planned_triangles is exact");
     // A zero size makes the shape's own normals 0/0: fall back to the geometric normals.
     mesh.ensure_normals();
-    Ok((plain(mesh), name))
+    Ok((plain(mesh), name, Vec::new()))
 }
 
 fn plain(mesh: Mesh) -> Model {
@@ -1080,9 +1381,12 @@ fn plain(mesh: Mesh) -> Model {
 /// there is one, else the file's (validated and added to the scene); faces without one get
 /// [`DEFAULT_MATERIAL`] (or its vertex-colour twin when the mesh has colours). Returns the
 /// material of the whole mesh, or a material per triangle.
+#[allow(clippy::too_many_arguments)]
 fn file_materials(
     model: &Model,
     name: &str,
+    i: usize,
+    file: &SceneFile,
     path: &Path,
     search: &SearchPath,
     materials: &mut Vec<Material>,
@@ -1093,7 +1397,14 @@ fn file_materials(
             return Ok(k as u32);
         }
         let prefix = format!("mesh '{name}' material '{}'", desc.name);
-        materials.push(build_material(desc, &prefix, path, search, textures)?);
+        // A texture of the file's materials is named by the mesh entry's file.
+        let refer = |e| {
+            let toml_key = format!("mesh[{i}].file");
+            referenced(file, path, &toml_key, Some(format!("{prefix}.texture")), e)
+        };
+        materials.push(build_material(
+            desc, &prefix, path, search, textures, &refer,
+        )?);
         Ok(materials.len() as u32 - 1)
     };
     let colors = model.mesh.colors.is_some();
@@ -1166,6 +1477,24 @@ faces = [[0, 1, 2]]
         assert_eq!(s.objects[0].mesh.triangles.len(), 1);
         let f = SceneFile::parse(MINIMAL, Path::new("s")).unwrap();
         assert_eq!(SceneFile::parse(&f.to_toml(), Path::new("s")).unwrap(), f);
+    }
+
+    #[test]
+    fn key_lines_point_at_keys() {
+        let text = "a = 1\n[image]\nwidth = 4\n[background]\ncubemap = \"sky\"\n[[mesh]]\n\
+            file = \"a.m\"\n[[mesh]]\n\nfile = \"b.m\"\n";
+        let lines = KeyLines::of(text);
+        for (key, line) in [
+            ("a", 1),
+            ("image.width", 3),
+            ("background.cubemap", 5),
+            ("mesh[0].file", 7),
+            ("mesh[1].file", 10),
+        ] {
+            assert_eq!(lines.line(key), Some(line), "{key}");
+        }
+        assert_eq!(lines.line("mesh[2].file"), None);
+        assert!(KeyLines::of("not toml = = =").line("a").is_none());
     }
 
     #[test]

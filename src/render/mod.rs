@@ -1,5 +1,6 @@
 //! Rendering: the world (scene + geometry + BVH), stages, tiles, statistics.
 
+pub mod part;
 pub mod queues;
 pub mod recursive;
 pub mod wavefront;
@@ -8,7 +9,8 @@ pub use crate::trace::Engine;
 pub use crate::world::{Stage, Terms, World};
 
 use crate::camera::sample_offsets;
-use crate::image::Image;
+use crate::error::Result;
+use crate::image::{Image, PixelBounds};
 use crate::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -18,12 +20,14 @@ use std::time::{Duration, Instant};
 /// Options of one render.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
+    /// One stage of the assignment, or `None` for the full scene.
     pub stage: Option<Stage>,
     /// Recursion depth; `None` uses the stage's (0 below `reflection`) or the scene's.
     pub depth: Option<u32>,
     /// Samples per pixel (stratified, deterministic).
     pub spp: u32,
-    /// Wavefront on packets (default) or the scalar recursive reference.
+    /// The wavefront renderer with the fastest kernel per queue (`Auto`, default), with one
+    /// kernel for every queue (`Packet`, `Wide`), or the scalar recursive reference.
     pub engine: Engine,
 }
 
@@ -33,12 +37,13 @@ impl Default for Settings {
             stage: None,
             depth: None,
             spp: 1,
-            engine: Engine::Packet,
+            engine: Engine::Auto,
         }
     }
 }
 
 impl Settings {
+    /// The recursion depth this render uses for `scene`.
     pub fn depth(&self, scene: &Scene) -> u32 {
         match (self.depth, self.stage) {
             (Some(d), _) => d,
@@ -61,13 +66,18 @@ pub const MAX_SAMPLE_SECONDARY_RAYS: u32 = 1 << 14;
 /// Rays traced, by kind.
 #[derive(Debug, Default)]
 pub struct RayCounts {
+    /// Camera rays.
     pub primary: AtomicU64,
+    /// Shadow rays.
     pub shadow: AtomicU64,
+    /// Reflection rays.
     pub reflection: AtomicU64,
+    /// Refraction rays.
     pub refraction: AtomicU64,
 }
 
 impl RayCounts {
+    /// All rays of every kind.
     pub fn total(&self) -> u64 {
         [
             &self.primary,
@@ -84,7 +94,9 @@ impl RayCounts {
 /// What a render measured.
 #[derive(Debug, Default)]
 pub struct RenderStats {
+    /// Rays traced, by kind.
     pub rays: RayCounts,
+    /// Wall time of the render.
     pub time: Duration,
     /// Summed thread time (ns) per phase: primary intersection, shading, shadow rays,
     /// secondary intersection (wavefront engine only).
@@ -116,6 +128,7 @@ impl RenderStats {
 }
 
 impl RenderStats {
+    /// Names of the phases of `phase_ns`, in order.
     pub const PHASES: [&'static str; 4] = ["primary", "shade", "shadow", "secondary"];
 }
 
@@ -130,6 +143,11 @@ pub fn tile_end(camera: &crate::camera::Camera, x0: u32, y0: u32) -> (u32, u32) 
 /// Tile edge in pixels: small enough to balance threads, big enough for coherent packets.
 pub const TILE: u32 = 16;
 
+/// Bytes of f32 pixels a batch of bands aims at (at least one band of [`TILE`] rows): 16 MB
+/// is 5 bands of a 16384-wide image (5120 tiles, plenty to keep every thread busy up to the
+/// batch's end) and the whole of a 1024x768 one.
+pub const BATCH_BYTES: usize = 16 << 20;
+
 /// Render `world` over tiles in parallel with the engine of `settings`: the wavefront
 /// renderer on packets, or the scalar reference (`recursive::trace1` per sample).
 /// `progress(pixels)` is called as tiles finish.
@@ -138,45 +156,119 @@ pub fn render(
     settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Image, RenderStats) {
+    let full = PixelBounds::full(world.scene.width, world.scene.height);
+    render_part(world, settings, full, progress)
+}
+
+/// [`render`] of the pixels of `part` only, into an image of the part's size: each pixel
+/// equal, bit for bit, to the same pixel of the full render.
+pub fn render_part(
+    world: &World,
+    settings: &Settings,
+    part: PixelBounds,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Image, RenderStats) {
+    let (w, h) = (part.width() as usize, part.height() as usize);
+    let mut image = Image::new(w, h);
+    let stats = render_rows(world, settings, part, progress, &mut |y, rows| {
+        let start = (y - part.y0) as usize * w;
+        image.pixels[start..start + rows.len()].copy_from_slice(rows);
+        Ok(())
+    })
+    .expect("the image sink does not fail");
+    (image, stats)
+}
+
+/// Render the pixels of `part` and hand them to `sink` in batches of whole rows, top to
+/// bottom: `sink(y, rows)` gets rows `y..` of the part, `part.width()` pixels each, row-major.
+/// A sink's error stops the render and is returned. Memory is one batch (about
+/// [`BATCH_BYTES`], twice: tiles, then rows) plus one tile's queues per thread, whatever the
+/// image size.
+///
+/// The tiles are the full render's: the grid of [`TILE`]-pixel squares from the image's
+/// corner, clipped to the image. A tile that `part` cuts is still traced whole, so every
+/// packet (and every pixel) is the full render's, and the pixels outside the part are
+/// dropped; a part on the tile grid (as `--tile` makes) wastes nothing.
+///
+/// When a sample passes [`MAX_SAMPLE_SECONDARY_RAYS`] the render stops after the batch in
+/// flight and returns with [`RenderStats::over_budget`] set; what was handed to the sink must
+/// then be thrown away.
+pub fn render_rows(
+    world: &World,
+    settings: &Settings,
+    part: PixelBounds,
+    progress: &(dyn Fn(u64) + Sync),
+    sink: &mut dyn FnMut(u32, &[Vec3]) -> Result<()>,
+) -> Result<RenderStats> {
     let start = Instant::now();
-    let (w, h) = (world.scene.width, world.scene.height);
+    let full = PixelBounds::full(world.scene.width, world.scene.height);
+    assert!(
+        full.contains(&part),
+        "part {part} outside the {}x{} image",
+        full.x1,
+        full.y1
+    );
     let stats = RenderStats::default();
     let offsets = sample_offsets(settings.spp);
-    let mut image = Image::new(w as usize, h as usize);
-    // Bands of TILE rows in parallel, tiles written straight into the image: memory is the
-    // image plus one tile's queues per thread, whatever the resolution.
-    let band_len = TILE as usize * w as usize;
-    image
-        .pixels
-        .par_chunks_mut(band_len)
-        .enumerate()
-        .for_each_init(wavefront::Workspace::default, |ws, (band, rows)| {
-            let y0 = band as u32 * TILE;
-            for x0 in (0..w).step_by(TILE as usize) {
+    let pw = part.width() as usize;
+    // tile rows and columns that meet the part
+    let (tx0, tx1) = (part.x0 / TILE, part.x1.div_ceil(TILE));
+    let (ty0, ty1) = (part.y0 / TILE, part.y1.div_ceil(TILE));
+    let band_bytes = TILE as usize * pw.max(1) * std::mem::size_of::<Vec3>();
+    let bands_per_batch = (BATCH_BYTES / band_bytes).max(1) as u32;
+    let mut rows = Vec::new();
+    for batch_ty in (ty0..ty1).step_by(bands_per_batch as usize) {
+        let batch_ty1 = (batch_ty + bands_per_batch).min(ty1);
+        let tiles: Vec<(u32, u32)> = (batch_ty..batch_ty1)
+            .flat_map(|ty| (tx0..tx1).map(move |tx| (tx * TILE, ty * TILE)))
+            .collect();
+        let rendered: Vec<Vec<Vec3>> = tiles
+            .par_iter()
+            .map_init(wavefront::Workspace::default, |ws, &(x0, y0)| {
                 if stats.over_budget.load(Ordering::Relaxed) != 0 {
-                    return; // the render has failed; stop tracing
+                    return Vec::new(); // the render has failed; stop tracing
                 }
-                let scalar;
-                let pixels: &[Vec3] = match settings.engine {
-                    Engine::Packet => {
+                let pixels = match settings.engine {
+                    Engine::Auto | Engine::Packet | Engine::Wide | Engine::Hybrid => {
                         wavefront::render_tile(world, settings, &offsets, x0, y0, &stats, ws);
-                        &ws.accum
+                        std::mem::take(&mut ws.accum)
                     }
                     Engine::Scalar => {
-                        scalar = recursive::render_tile(world, settings, &offsets, x0, y0, &stats);
-                        &scalar
+                        recursive::render_tile(world, settings, &offsets, x0, y0, &stats)
                     }
                 };
-                let tw = TILE.min(w - x0) as usize;
-                for (k, p) in pixels.iter().enumerate() {
-                    rows[(k / tw) * w as usize + x0 as usize + k % tw] = *p;
-                }
-                progress(pixels.len() as u64);
+                let (x1, y1) = ((x0 + TILE).min(full.x1), (y0 + TILE).min(full.y1));
+                let inside = part.intersect(&PixelBounds { x0, x1, y0, y1 });
+                progress(inside.area());
+                pixels
+            })
+            .collect();
+        if stats.over_budget.load(Ordering::Relaxed) != 0 {
+            break;
+        }
+        // the batch's rows of the part, from its tiles
+        let (ry0, ry1) = (
+            (batch_ty * TILE).max(part.y0),
+            (batch_ty1 * TILE).min(part.y1),
+        );
+        rows.clear();
+        rows.resize((ry1 - ry0) as usize * pw, Vec3::ZERO);
+        for (&(x0, y0), pixels) in tiles.iter().zip(&rendered) {
+            let tw = (TILE.min(full.x1 - x0)) as usize;
+            let (x1, y1) = (x0 + tw as u32, (y0 + TILE).min(full.y1));
+            let inside = part.intersect(&PixelBounds { x0, x1, y0, y1 });
+            for y in inside.y0..inside.y1 {
+                let src = (y - y0) as usize * tw + (inside.x0 - x0) as usize;
+                let dst = (y - ry0) as usize * pw + (inside.x0 - part.x0) as usize;
+                let n = inside.width() as usize;
+                rows[dst..dst + n].copy_from_slice(&pixels[src..src + n]);
             }
-        });
-    let stats = RenderStats {
+        }
+        drop(rendered);
+        sink(ry0, &rows)?;
+    }
+    Ok(RenderStats {
         time: start.elapsed(),
         ..stats
-    };
-    (image, stats)
+    })
 }

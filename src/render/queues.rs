@@ -14,6 +14,7 @@ pub struct LaneList {
 }
 
 impl LaneList {
+    /// The lanes whose bits are set in the low 8 bits of `bits`.
     #[inline(always)]
     pub fn new(bits: u32) -> Self {
         let mut idx = [0u8; LANES];
@@ -27,6 +28,7 @@ impl LaneList {
         LaneList { idx, len }
     }
 
+    /// No lane set.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -53,14 +55,20 @@ impl LaneList {
 /// the pixel it contributes to, the RGB weight of that contribution and its remaining depth.
 #[derive(Clone, Debug, Default)]
 pub struct RayQueue {
+    /// Origins, SoA.
     pub o: [Vec<f32>; 3],
+    /// Directions, SoA.
     pub d: [Vec<f32>; 3],
+    /// Pixel index (`y * width + x`) each ray adds to.
     pub pixel: Vec<u32>,
+    /// RGB weight of each ray's contribution, SoA.
     pub weight: [Vec<f32>; 3],
+    /// Remaining recursion depth of each ray.
     pub depth: Vec<u32>,
 }
 
 impl RayQueue {
+    /// Append one ray.
     pub fn push(&mut self, ray: &Ray, pixel: u32, weight: Vec3, depth: u32) {
         for k in 0..3 {
             self.o[k].push(ray.origin[k]);
@@ -111,14 +119,17 @@ impl RayQueue {
         Vec3x8::load(&self.weight, start, 0.0)
     }
 
+    /// Rays queued.
     pub fn len(&self) -> usize {
         self.pixel.len()
     }
 
+    /// Whether no ray is queued.
     pub fn is_empty(&self) -> bool {
         self.pixel.is_empty()
     }
 
+    /// Empty the queue, keeping its memory.
     pub fn clear(&mut self) {
         for v in self.o.iter_mut().chain(&mut self.d).chain(&mut self.weight) {
             v.clear();
@@ -127,11 +138,13 @@ impl RayQueue {
         self.depth.clear();
     }
 
+    /// Entry `i` as a ray (`tnear = 0`, `tfar = inf`).
     pub fn ray(&self, i: usize) -> Ray {
         let v = |a: &[Vec<f32>; 3]| Vec3::new(a[0][i], a[1][i], a[2][i]);
         Ray::new(v(&self.o), v(&self.d), 0.0, f32::INFINITY)
     }
 
+    /// Entry `i`'s weight.
     pub fn weight(&self, i: usize) -> Vec3 {
         Vec3::new(self.weight[0][i], self.weight[1][i], self.weight[2][i])
     }
@@ -205,10 +218,15 @@ pub struct BinScratch {
 /// when the light is visible.
 #[derive(Clone, Debug, Default)]
 pub struct ShadowQueue {
+    /// Origins, SoA.
     pub o: [Vec<f32>; 3],
+    /// Directions, SoA.
     pub d: [Vec<f32>; 3],
+    /// Distance to the light (hits must be nearer).
     pub tfar: Vec<f32>,
+    /// Pixel index each ray adds to.
     pub pixel: Vec<u32>,
+    /// What the pixel gets when the light is visible, SoA.
     pub contribution: [Vec<f32>; 3],
 }
 
@@ -235,14 +253,17 @@ impl ShadowQueue {
         lanes.extend(&mut self.pixel, pixel);
     }
 
+    /// Shadow rays queued.
     pub fn len(&self) -> usize {
         self.pixel.len()
     }
 
+    /// Whether no shadow ray is queued.
     pub fn is_empty(&self) -> bool {
         self.pixel.is_empty()
     }
 
+    /// Empty the queue, keeping its memory.
     pub fn clear(&mut self) {
         for v in self
             .o
@@ -256,6 +277,7 @@ impl ShadowQueue {
         self.pixel.clear();
     }
 
+    /// Entries `start .. start + 8` as a packet and its active mask (missing lanes inactive).
     pub fn packet(&self, start: usize) -> (RayPacket8, M32x8) {
         let n = (self.len() - start).min(LANES);
         let packet = RayPacket8 {

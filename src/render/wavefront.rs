@@ -1,4 +1,4 @@
-//! The wavefront renderer on the packet engine: per tile, queues of rays drained stage by
+//! The wavefront renderer (packet and wide kernels, chosen per queue): per tile, queues of rays drained stage by
 //! stage, one function per stage (pbrt-v4's wavefront integrator reads the same way):
 //!
 //! generate_camera_rays -> intersect_closest -> handle_escaped_rays -> shade_hits
@@ -9,11 +9,17 @@
 
 use super::queues::{BinScratch, RayQueue, ShadowQueue};
 use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
-use crate::accel::{intersect8, occluded8};
+use crate::accel::{
+    Accel, intersect_hybrid8, intersect_wide8, intersect8, occluded_hybrid8, occluded_wide8,
+    occluded8,
+};
 use crate::camera::Camera;
+use crate::packet::RayPacket8;
 use crate::packet::{HitPacket8, PacketShape, camera_packet};
 use crate::shade::{Shade8, shade8};
+use crate::simd::M32x8;
 use crate::simd::{self, LANES, Vec3x8};
+use crate::trace::Engine;
 use glam::Vec3;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -31,6 +37,77 @@ use std::time::Instant;
 /// order and is coherent already; binning it cost `phong` (depth 1) 5-10% for nothing, and
 /// skipping it leaves `refraction` where it was (2.61-2.64 s against 2.41-2.70 s).
 pub const BIN_SECONDARY: bool = true;
+
+/// How a queue's packets are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// `intersect8` / `occluded8`: the 8 rays together down the binary tree.
+    Packet,
+    /// `intersect_wide1` / `occluded_wide1` lane by lane down the 8-wide tree.
+    Wide,
+    /// `intersect_hybrid8` / `occluded_hybrid8`: together while the lanes agree, then alone.
+    Hybrid,
+}
+
+impl Kernel {
+    #[inline]
+    fn intersect(self, accel: &Accel, p: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
+        match self {
+            Kernel::Packet => intersect8(accel, p, active, cull),
+            Kernel::Wide => intersect_wide8(accel, p, active, cull),
+            Kernel::Hybrid => intersect_hybrid8(accel, p, active, cull),
+        }
+    }
+    #[inline]
+    fn occluded(self, accel: &Accel, p: &RayPacket8, active: M32x8, cull: bool) -> M32x8 {
+        match self {
+            Kernel::Packet => occluded8(accel, p, active, cull),
+            Kernel::Wide => occluded_wide8(accel, p, active, cull),
+            Kernel::Hybrid => occluded_hybrid8(accel, p, active, cull),
+        }
+    }
+}
+
+/// The kernel of each queue.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Kernels {
+    /// Camera rays (generation 0).
+    pub camera: Kernel,
+    /// Shadow rays of every generation.
+    pub shadow: Kernel,
+    /// Reflection and refraction rays (generations 1 and on).
+    pub secondary: Kernel,
+}
+
+/// `--engine auto`: the kernel per queue, by measurement (README, "Engines"). Camera rays are
+/// coherent: packets trace them fastest (bench primary: packet8 ~43 Mrays/s, wide1 ~24).
+/// Shadow rays towards a point light are coherent too (bench shadow: packet8 ~10, hybrid8
+/// ~7.6, wide1 ~4.9). Reflection and refraction rays are coherent off `phong`'s floor (packet
+/// twice as fast as wide there) and scattered after a refraction (bench incoherent: wide1
+/// ~3.7, hybrid8 ~3.4, packet8 ~2.8), so they go hybrid, which keeps a packet while its lanes
+/// agree. On the `refraction` render all kernels measured within the noise of each other.
+pub const AUTO: Kernels = Kernels {
+    camera: Kernel::Packet,
+    shadow: Kernel::Packet,
+    secondary: Kernel::Hybrid,
+};
+
+impl Kernels {
+    /// The kernels an engine uses (`Scalar` has its own renderer; here it maps to `Packet`).
+    pub fn of(engine: Engine) -> Kernels {
+        let all = |k| Kernels {
+            camera: k,
+            shadow: k,
+            secondary: k,
+        };
+        match engine {
+            Engine::Auto => AUTO,
+            Engine::Wide => all(Kernel::Wide),
+            Engine::Hybrid => all(Kernel::Hybrid),
+            Engine::Packet | Engine::Scalar => all(Kernel::Packet),
+        }
+    }
+}
 
 /// Queues and buffers of one worker, reused from tile to tile (so a tile allocates nothing
 /// once the first few tiles have grown them).
@@ -61,6 +138,7 @@ pub fn render_tile(
     let camera = world.scene.camera();
     let terms = Terms::of(settings.stage);
     let depth = settings.depth(&world.scene);
+    let kernels = Kernels::of(settings.engine);
     let (x1, y1) = tile_end(&camera, x0, y0);
     let Workspace {
         rays,
@@ -89,7 +167,12 @@ pub fn render_tile(
     let mut generation = 0;
     while !rays.is_empty() {
         let start = Instant::now();
-        intersect_closest(world, rays, hits);
+        let kernel = if generation == 0 {
+            kernels.camera
+        } else {
+            kernels.secondary
+        };
+        intersect_closest(world, kernel, rays, hits);
         phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
 
         let start = Instant::now();
@@ -115,7 +198,7 @@ pub fn render_tile(
 
         let start = Instant::now();
         counts[1] += shadows.len() as u64;
-        trace_shadow_rays(world, shadows, accum);
+        trace_shadow_rays(world, kernels.shadow, shadows, accum);
         shadows.clear();
         phase_ns[2] += start.elapsed().as_nanos() as u64;
 
@@ -188,11 +271,11 @@ fn generate_camera_rays(
 }
 
 /// Closest hits of every queued ray, 8 consecutive entries per packet.
-fn intersect_closest(world: &World, rays: &RayQueue, out: &mut Vec<HitPacket8>) {
+fn intersect_closest(world: &World, kernel: Kernel, rays: &RayQueue, out: &mut Vec<HitPacket8>) {
     out.clear();
     out.extend((0..rays.len()).step_by(LANES).map(|start| {
         let (packet, active) = rays.packet(start);
-        intersect8(&world.accel, &packet, active, world.scene.cull_backfaces)
+        kernel.intersect(&world.accel, &packet, active, world.scene.cull_backfaces)
     }));
 }
 
@@ -287,10 +370,10 @@ fn add_lanes(accum: &mut [Vec3], bits: u32, pixel: [u32; LANES], v: &Vec3x8) {
 }
 
 /// Any-hit queries for the shadow queue, 8 per packet; visible lights add their contribution.
-fn trace_shadow_rays(world: &World, shadows: &ShadowQueue, accum: &mut [Vec3]) {
+fn trace_shadow_rays(world: &World, kernel: Kernel, shadows: &ShadowQueue, accum: &mut [Vec3]) {
     for start in (0..shadows.len()).step_by(LANES) {
         let (packet, active) = shadows.packet(start);
-        let occluded = occluded8(&world.accel, &packet, active, world.scene.cull_backfaces);
+        let occluded = kernel.occluded(&world.accel, &packet, active, world.scene.cull_backfaces);
         let visible = simd::bitmask(active) & !simd::bitmask(occluded);
         for i in (0..LANES).filter(|&i| visible >> i & 1 == 1) {
             let j = start + i;

@@ -20,24 +20,33 @@ pub struct Surface {
     pub q: Vec3,
     /// Geometric and shading normals, both flipped to face the ray on a back-face hit.
     pub ng: Vec3,
+    /// The interpolated shading normal `N` (unit, facing the ray).
     pub n: Vec3,
     /// The ray hit a back face (`<d, Ng> > 0`): it is leaving the object.
     pub back: bool,
+    /// The surface colour `Od` at the hit.
     pub od: Vec3,
+    /// Index of the material.
     pub material: u32,
 }
 
 /// A reflection or refraction ray with the weight (`ks` or `kt`) its colour is added with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Secondary {
+    /// The ray to trace.
     pub ray: Ray,
+    /// What its colour is multiplied by before it is added.
     pub weight: Vec3,
+    /// Reflection or refraction.
     pub kind: SecondaryKind,
 }
 
+/// Which kind of secondary ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SecondaryKind {
+    /// Along the mirror direction.
     Reflection,
+    /// Through the surface (or totally internally reflected).
     Refraction,
 }
 

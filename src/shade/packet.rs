@@ -19,8 +19,11 @@ use crate::world::{Terms, World};
 pub struct LightLanes {
     /// Lanes where `<N, l> > 0` (the light can contribute).
     pub lit: M32x8,
+    /// Shadow-ray origins (offset from the hit towards the light's side).
     pub origin: Vec3x8,
+    /// Unit directions towards the light.
     pub dir: Vec3x8,
+    /// Distance to the light.
     pub tfar: F32x8,
     /// `Ip [kd Od <N,l> + ks max(<v,r>,0)^n]`, to be added when the light is visible.
     pub contribution: Vec3x8,
@@ -31,7 +34,9 @@ pub struct LightLanes {
 pub struct SecondaryLanes {
     /// Lanes that spawn this ray (a hit with depth left and `ks > 0`, resp. `kt > 0`).
     pub mask: M32x8,
+    /// Ray origins (offset from the hit).
     pub origin: Vec3x8,
+    /// Ray directions.
     pub dir: Vec3x8,
     /// `ks` or `kt` (RGB): the weight the ray's colour is added with.
     pub weight: Vec3x8,
@@ -42,8 +47,11 @@ pub struct SecondaryLanes {
 pub struct Shade8 {
     /// `Ia ka Od` (+ `ke` on emitting lanes) per lane.
     pub ambient: Vec3x8,
+    /// One entry per light.
     pub lights: Vec<LightLanes>,
+    /// The reflection rays.
     pub reflection: SecondaryLanes,
+    /// The refraction rays.
     pub refraction: SecondaryLanes,
 }
 

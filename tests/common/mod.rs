@@ -6,15 +6,13 @@ use whitted::io::scene_file::{SearchPath, build_scene};
 use whitted::render::{Settings, Stage, World};
 use whitted::scenes;
 
-/// The shared data folder: `WHITTED_ASSETS` when set (as `.ci/run` does), else `../shared`
-/// beside the project. Panics (fails the test) when the data is missing.
+/// The project's own data folder (the shipped `meshes/` and `textures/`): the tests need no
+/// `WHITTED_ASSETS` and nothing beside the repository.
 pub fn assets() -> PathBuf {
-    let dir = std::env::var_os("WHITTED_ASSETS")
-        .map(|v| std::env::split_paths(&v).next().unwrap())
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let dir = PathBuf::from(whitted::io::scene_file::PROJECT_DATA);
     assert!(
         dir.join("meshes/kitten.m").is_file(),
-        "shared data not found at {} (set WHITTED_ASSETS)",
+        "the shipped data is missing from {}",
         dir.display()
     );
     dir

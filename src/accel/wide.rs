@@ -1,0 +1,326 @@
+//! The 8-wide BVH: the obvhs BVH2 collapsed into nodes of up to 8 children whose boxes are
+//! stored SoA (one ray meets all 8 boxes in one slab test), and leaves of SoA triangle blocks
+//! (one ray against up to 8 triangles in lanes, with `hit_triangle1`'s arithmetic).
+//!
+//! Collapse (`Bvh8::collapse`), top down from the BVH2 root:
+//! - a subtree of at most [`BLOCK`] triangles becomes one leaf block: testing 8 triangles in
+//!   lanes costs what testing one does, so splitting such a subtree further only adds boxes
+//!   (its SAH cost as one leaf, `C_block * A(node)`, is below any split's, `C_node * A(node) +
+//!   C_block * (A(l) + A(r))`, whenever `C_block <= C_node`, which holds here);
+//! - otherwise a node gathers up to 8 children by repeatedly opening the child with the
+//!   largest surface area (the one a random ray is most likely to enter, so opening it saves
+//!   the most expected node visits: the greedy SAH step Embree's wide builders use).
+//!
+//! Boxes are the BVH2's padded boxes (`Accel::build`), so every slab-test guarantee of the
+//! binary tree holds for the wide one and both find the same hits.
+
+use super::{Accel, Node};
+use crate::simd::{self, F32x8, Vec3x8};
+
+/// Children per node and triangles per leaf block.
+pub const BLOCK: usize = 8;
+
+/// A child reference with this bit set is a leaf: bits 0..28 the first block, bits 28..31
+/// the number of blocks minus one. Otherwise it is an index into `Bvh8::nodes`.
+pub const LEAF_BIT: u32 = 1 << 31;
+const LEAF_BLOCKS_SHIFT: u32 = 28;
+const LEAF_FIRST_MASK: u32 = (1 << LEAF_BLOCKS_SHIFT) - 1;
+
+/// The first block and the block count of a leaf reference.
+#[inline(always)]
+pub fn leaf_blocks(r: u32) -> (usize, usize) {
+    (
+        (r & LEAF_FIRST_MASK) as usize,
+        ((r & !LEAF_BIT) >> LEAF_BLOCKS_SHIFT) as usize + 1,
+    )
+}
+
+/// A node (256 bytes, four cache lines): the boxes of up to 8 children, SoA (`min[axis]`
+/// lane `i` = child `i`), their references, and per direction octant the order in which to
+/// visit them (after Fuetterling et al. 2017, as tinybvh's `perm8`): `order[oct]` holds 8
+/// slots of 3 bits, nearest first along the octant's diagonal, so traversal sorts nothing at
+/// run time. The top byte of `order[0]` has bit `i` set when slot `i` is in use.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+pub struct Node8 {
+    pub min: [F32x8; 3],
+    pub max: [F32x8; 3],
+    pub child: [u32; BLOCK],
+    pub order: [u32; BLOCK],
+}
+
+/// Up to 8 triangles in lanes, as `hit_triangle1` reads them (`TriangleSoa`'s fields). Unused
+/// lanes have `n = 0` (and `v0 = p1 = p2 = 0`): their plane test is `0 / 0 = NaN`, which fails
+/// the depth test, so they never hit (culled too: `<d, 0> >= 0`).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+pub struct TriBlock8 {
+    pub n: Vec3x8,
+    pub v0: Vec3x8,
+    pub p1: Vec3x8,
+    pub p2: Vec3x8,
+    pub n_len: F32x8,
+    /// Original triangle index per lane (`u32::MAX` in unused lanes).
+    pub prim: [u32; BLOCK],
+    /// SoA slot in `Accel::tris` per lane (for the f64 edge test).
+    pub slot: [u32; BLOCK],
+}
+
+/// The wide tree: `nodes[0]` is the root (absent for an empty scene), leaves in `blocks`.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh8 {
+    pub nodes: Vec<Node8>,
+    pub blocks: Vec<TriBlock8>,
+    /// Deepest root-to-leaf path in nodes (sizes traversal stacks).
+    pub depth: usize,
+    /// Per binary node, the wide reference of the same subtree ([`NO_ENTRY`] for binary
+    /// nodes that were opened into a wide node's children): where a hybrid packet hands its
+    /// remaining lanes to single-ray traversal.
+    pub entry: Vec<u32>,
+}
+
+/// `Bvh8::entry` of a binary node without a wide twin.
+pub const NO_ENTRY: u32 = LEAF_BIT - 1;
+
+impl Bvh8 {
+    /// Collapse `accel`'s binary tree (see the module header).
+    pub fn collapse(accel: &Accel) -> Bvh8 {
+        let mut out = Bvh8::default();
+        if accel.nodes.is_empty() {
+            return out;
+        }
+        let counts = subtree_counts(&accel.nodes);
+        out.entry = vec![NO_ENTRY; accel.nodes.len()];
+        out.nodes.reserve(accel.nodes.len() / 4 + 1);
+        out.blocks.reserve(accel.tris.len() / 4 + 1);
+        let root = &accel.nodes[0];
+        if counts[0] as usize <= BLOCK || root.count > 0 {
+            // The whole scene is one leaf: a root node with a single child.
+            out.nodes.push(Node8::default());
+            let leaf = out.leaf(accel, &counts, 0);
+            out.nodes[0].set_child(0, root, leaf);
+            out.nodes[0].set_order(1);
+            out.depth = 1;
+            out.entry[0] = 0;
+        } else {
+            out.depth = out.node(accel, &counts, 0, 1);
+        }
+        out
+    }
+
+    /// Bytes of the tree and its blocks (the triangles' hot layout).
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node8>() + self.blocks.len() * size_of::<TriBlock8>()
+    }
+
+    /// Make the wide node for binary node `b` (not a leaf) and its subtree; returns the depth
+    /// below and including it.
+    fn node(&mut self, accel: &Accel, counts: &[u32], b: usize, depth: usize) -> usize {
+        let me = self.nodes.len();
+        self.nodes.push(Node8::default());
+        self.entry[b] = me as u32;
+        // open the largest-area child until 8 children or only leaves remain.
+        let mut kids: Vec<usize> = Vec::with_capacity(BLOCK);
+        let first = accel.nodes[b].first as usize;
+        kids.extend([first, first + 1]);
+        while kids.len() < BLOCK {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| !is_leaf(accel, counts, k))
+                .max_by(|a, b| area(&accel.nodes[*a.1]).total_cmp(&area(&accel.nodes[*b.1])))
+                .map(|(i, _)| i);
+            let Some(i) = open else { break };
+            let k = kids.swap_remove(i);
+            let f = accel.nodes[k].first as usize;
+            kids.extend([f, f + 1]);
+        }
+        let mut deepest = depth;
+        for (slot, &k) in kids.iter().enumerate() {
+            let r = if is_leaf(accel, counts, k) {
+                self.leaf(accel, counts, k)
+            } else {
+                let r = self.nodes.len() as u32;
+                deepest = deepest.max(self.node(accel, counts, k, depth + 1));
+                r
+            };
+            self.nodes[me].set_child(slot, &accel.nodes[k], r);
+        }
+        self.nodes[me].set_order(kids.len());
+        deepest
+    }
+
+    /// Blocks for all triangles below binary node `b`; returns the leaf reference.
+    fn leaf(&mut self, accel: &Accel, counts: &[u32], b: usize) -> u32 {
+        let mut slots = Vec::with_capacity(counts[b] as usize);
+        collect_slots(&accel.nodes, b, &mut slots);
+        let first = self.blocks.len();
+        for chunk in slots.chunks(BLOCK) {
+            self.blocks.push(TriBlock8::new(accel, chunk));
+        }
+        let n = self.blocks.len() - first;
+        let r = LEAF_BIT | ((n as u32).saturating_sub(1) << LEAF_BLOCKS_SHIFT) | first as u32;
+        self.entry[b] = r;
+        assert!(
+            (1..=8).contains(&n) && first <= LEAF_FIRST_MASK as usize,
+            "leaf of {n} blocks at {first}: the BVH2 leaf size or scene cap changed"
+        );
+        r
+    }
+}
+
+impl Node8 {
+    fn set_child(&mut self, slot: usize, box_: &Node, r: u32) {
+        for k in 0..3 {
+            let mut lo = simd::lanes(self.min[k]);
+            let mut hi = simd::lanes(self.max[k]);
+            lo[slot] = box_.min[k];
+            hi[slot] = box_.max[k];
+            self.min[k] = simd::from_lanes(lo);
+            self.max[k] = simd::from_lanes(hi);
+        }
+        self.child[slot] = r;
+    }
+
+    /// The per-octant visiting orders of the first `n` slots, and the in-use bits.
+    fn set_order(&mut self, n: usize) {
+        let (lo, hi) = (self.min.map(simd::lanes), self.max.map(simd::lanes));
+        for oct in 0..8 {
+            // octant bit k set: the direction's component k is negative.
+            let sign = |k: usize| if oct >> k & 1 == 1 { -1.0 } else { 1.0 };
+            let key = |i: usize| (0..3).map(|k| (lo[k][i] + hi[k][i]) * sign(k)).sum::<f32>();
+            let mut slots: Vec<usize> = (0..n).collect();
+            slots.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
+            slots.extend(n..BLOCK);
+            self.order[oct] = slots
+                .iter()
+                .enumerate()
+                .fold(0, |acc, (k, &slot)| acc | (slot as u32) << (3 * k));
+        }
+        self.order[0] |= ((1u32 << n) - 1) << 24;
+    }
+
+    /// Bit `i` set when child slot `i` is in use.
+    #[inline(always)]
+    pub fn valid(&self) -> u32 {
+        self.order[0] >> 24
+    }
+}
+
+impl TriBlock8 {
+    /// The triangles at SoA slots `slots` (at most 8) in lanes `0 .. slots.len()`.
+    fn new(accel: &Accel, slots: &[u32]) -> TriBlock8 {
+        let t = &accel.tris;
+        let get = |f: &dyn Fn(usize) -> [f32; 3]| {
+            Vec3x8::from_fn(|j| slots.get(j).map_or([0.0; 3], |&s| f(s as usize)))
+        };
+        TriBlock8 {
+            n: get(&|s| t.n(s)),
+            v0: get(&|s| t.v0(s)),
+            p1: get(&|s| t.p1(s)),
+            p2: get(&|s| t.p2(s)),
+            n_len: simd::from_lanes(std::array::from_fn(|j| {
+                slots.get(j).map_or(0.0, |&s| t.n_len[s as usize])
+            })),
+            prim: std::array::from_fn(|j| slots.get(j).map_or(u32::MAX, |&s| t.prim[s as usize])),
+            slot: std::array::from_fn(|j| slots.get(j).copied().unwrap_or(0)),
+        }
+    }
+}
+
+fn is_leaf(accel: &Accel, counts: &[u32], b: usize) -> bool {
+    accel.nodes[b].count > 0 || counts[b] as usize <= BLOCK
+}
+
+/// Half the surface area of a node's box (the SAH weight; the factor 2 does not matter).
+fn area(n: &Node) -> f32 {
+    let e = [0, 1, 2].map(|k| (n.max[k] - n.min[k]).max(0.0));
+    e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+}
+
+/// Triangles below each binary node (post-order, explicit stack: obvhs does not promise
+/// that children follow their parent in the array).
+fn subtree_counts(nodes: &[Node]) -> Vec<u32> {
+    let mut counts = vec![0u32; nodes.len()];
+    let mut stack = vec![(0usize, false)];
+    while let Some((i, children_done)) = stack.pop() {
+        let n = &nodes[i];
+        let f = n.first as usize;
+        if n.count > 0 {
+            counts[i] = n.count;
+        } else if children_done {
+            counts[i] = counts[f] + counts[f + 1];
+        } else {
+            stack.extend([(i, true), (f, false), (f + 1, false)]);
+        }
+    }
+    counts
+}
+
+fn collect_slots(nodes: &[Node], b: usize, out: &mut Vec<u32>) {
+    let n = &nodes[b];
+    if n.count > 0 {
+        out.extend(n.first..n.first + n.count);
+    } else {
+        collect_slots(nodes, n.first as usize, out);
+        collect_slots(nodes, n.first as usize + 1, out);
+    }
+}
+
+/// The wide tree taken from obvhs's compressed wide BVH instead of our collapse: its child
+/// boxes dequantized (and padded as `Accel::build` pads, so they stay conservative) and its
+/// leaves (at most 3 triangles each, obvhs's cap for CWBVH) as blocks. Kept to measure the two
+/// ways of building the tree against each other (`tests/measure.rs`, README "Engines");
+/// `entry` is left empty, so hybrid packets never switch on it.
+pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
+    let mut slot_of = vec![0u32; accel.tris.len()];
+    for (slot, &p) in accel.tris.prim.iter().enumerate() {
+        slot_of[p as usize] = slot as u32;
+    }
+    let mut out = Bvh8 {
+        nodes: vec![Node8::default(); cw.nodes.len()],
+        ..Bvh8::default()
+    };
+    for (i, n) in cw.nodes.iter().enumerate() {
+        let mut k = 0;
+        for c in 0..BLOCK {
+            if n.is_child_empty(c) {
+                continue;
+            }
+            let b = n.child_aabb(c);
+            let (lo, hi) = (glam::Vec3::from(b.min), glam::Vec3::from(b.max));
+            let pad = super::BOX_PAD * lo.abs().max(hi.abs()).max_element() + f32::MIN_POSITIVE;
+            let bx = Node {
+                min: (lo - pad).into(),
+                max: (hi + pad).into(),
+                count: 0,
+                first: 0,
+            };
+            let r = if n.is_leaf(c) {
+                let (start, count) = n.child_primitives(c);
+                let slots: Vec<u32> = (start..start + count)
+                    .map(|j| slot_of[cw.primitive_indices[j as usize] as usize])
+                    .collect();
+                out.blocks.push(TriBlock8::new(accel, &slots));
+                LEAF_BIT | (out.blocks.len() - 1) as u32
+            } else {
+                n.child_node_index(c)
+            };
+            out.nodes[i].set_child(k, &bx, r);
+            k += 1;
+        }
+        out.nodes[i].set_order(k);
+    }
+    // depth, for stack sizing
+    let mut stack = vec![(0u32, 1usize)];
+    while let Some((i, d)) = stack.pop() {
+        out.depth = out.depth.max(d);
+        let n = &out.nodes[i as usize];
+        for c in 0..BLOCK {
+            if n.valid() >> c & 1 == 1 && n.child[c] & LEAF_BIT == 0 {
+                stack.push((n.child[c], d + 1));
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,308 @@
+//! Single-ray traversal of the 8-wide BVH: one ray against a node's 8 boxes in one slab test,
+//! hit children visited nearest first from an explicit stack, one ray against a leaf's 8
+//! triangles in lanes (the assignment's test with `hit_triangle1`'s arithmetic per lane).
+//!
+//! `intersect_wide1` / `occluded_wide1` return exactly what `intersect1` / `occluded1`
+//! return: the per-triangle arithmetic is the same, the boxes are the same padded boxes, and
+//! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
+
+use super::scalar::{BARY_SAFE, inside_f64};
+use super::wide::{Bvh8, LEAF_BIT, TriBlock8, leaf_blocks};
+use super::{Accel, SLAB_FAR_SCALE, safe_inv};
+use crate::packet::{HitPacket8, RayPacket8};
+use crate::ray::{Hit, Ray};
+use crate::simd::{self, F32x8, M32x8, Vec3x8};
+
+/// A ray splatted across lanes for the wide kernels, with what the slab test needs.
+#[derive(Clone, Copy, Debug)]
+pub struct RayWide {
+    pub o: Vec3x8,
+    pub d: Vec3x8,
+    pub dlen: F32x8,
+    pub inv: Vec3x8,
+    /// `inv[k] < 0`: the slab's near plane is `max[k]`.
+    pub neg: [bool; 3],
+    /// The direction's octant (bit k: component k negative), indexing `Node8::order`.
+    pub octant: usize,
+    pub o1: [f32; 3],
+    pub d1: [f32; 3],
+    pub tnear: f32,
+}
+
+impl RayWide {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> RayWide {
+        let o1 = ray.origin.to_array();
+        let d1 = ray.dir.to_array();
+        let inv = d1.map(safe_inv);
+        RayWide {
+            o: Vec3x8::splat(o1),
+            d: Vec3x8::splat(d1),
+            // |d| as Ray1 computes it, so the grazing margin is the same float.
+            dlen: simd::splat((d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt()),
+            inv: Vec3x8::splat(inv),
+            neg: inv.map(|v| v < 0.0),
+            octant: (0..3).fold(0, |o, k| o | ((inv[k] < 0.0) as usize) << k),
+            o1,
+            d1,
+            tnear: ray.tnear,
+        }
+    }
+}
+
+/// The plane + barycentric test of one ray against a block's 8 triangles: the nearest lane
+/// hit with `tnear < t < tfar` (smallest `t`, then smallest triangle index) as
+/// `(triangle, t, b1, b2)`. Steps as in `hit_triangle1`, per lane:
+#[inline(always)]
+pub fn hit_block1(accel: &Accel, b: &TriBlock8, r: &RayWide, tfar: f32, cull: bool) -> Option<Hit> {
+    // plane hit: t = <v0 - p, n> / <d, n> (in-plane rays, zero-area triangles and unused
+    // lanes give inf or NaN and fail the depth test).
+    let dn = r.d.dot(b.n);
+    let mut mask = simd::splat(f32::from_bits(u32::MAX));
+    // culling: skip back faces (<d, n> >= 0).
+    if cull {
+        mask = simd::and_not(mask, simd::ge(dn, simd::splat(0.0)));
+    }
+    let t = (b.v0 - r.o).dot(b.n) / dn;
+    // depth test: NaN fails both comparisons and so misses.
+    mask = mask & simd::gt(t, simd::splat(r.tnear)) & simd::lt(t, simd::splat(tfar));
+    if simd::none(mask) {
+        return None;
+    }
+    // barycentric: signed sub-triangle areas over the whole, as linear forms of w = q - v0.
+    let q = r.o + r.d * t;
+    let w = q - b.v0;
+    let b1 = w.dot(b.p1);
+    let b2 = w.dot(b.p2);
+    let b0 = simd::splat(1.0) - b1 - b2;
+    // inside when no coordinate is negative; lanes within BARY_SAFE of an edge by the f64
+    // edge signs, as hit_triangle1 does.
+    let s = simd::splat(BARY_SAFE) * (r.dlen * b.n_len / dn.abs());
+    let ns = -s;
+    let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
+    let near = simd::ge(b0, ns) & simd::ge(b1, ns) & simd::ge(b2, ns);
+    let mut bits = simd::bitmask(mask & sure);
+    let mut unsure = simd::bitmask(simd::and_not(mask & near, sure));
+    while unsure != 0 {
+        let lane = unsure.trailing_zeros() as usize;
+        unsure &= unsure - 1;
+        if inside_f64(accel, b.slot[lane] as usize, r.o1, r.d1) {
+            bits |= 1 << lane;
+        }
+    }
+    // record hit: the smallest (t, triangle index) of the lanes that hit.
+    let (t, b1, b2) = (simd::lanes(t), simd::lanes(b1), simd::lanes(b2));
+    let mut best: Option<Hit> = None;
+    while bits != 0 {
+        let lane = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        let tri = b.prim[lane];
+        if best.is_none_or(|h| t[lane] < h.t || (t[lane] == h.t && tri < h.tri)) {
+            best = Some(Hit {
+                tri,
+                t: t[lane],
+                b1: b1[lane],
+                b2: b2[lane],
+            });
+        }
+    }
+    best
+}
+
+/// One ray against a node's 8 boxes: the bits of the children met within `[tnear, tfar]`
+/// and their entry distances. Near and far planes are picked per axis by the direction's
+/// sign, which gives exactly `min` / `max` of the two plane distances of `hit_box1`.
+#[inline(always)]
+pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f32; 8]) {
+    let axis = |k: usize, o: F32x8, inv: F32x8| {
+        let (near, far) = if r.neg[k] {
+            (node.max[k], node.min[k])
+        } else {
+            (node.min[k], node.max[k])
+        };
+        ((near - o) * inv, (far - o) * inv)
+    };
+    let (nx, fx) = axis(0, r.o.x, r.inv.x);
+    let (ny, fy) = axis(1, r.o.y, r.inv.y);
+    let (nz, fz) = axis(2, r.o.z, r.inv.z);
+    let lo = simd::max(simd::max(nx, ny), simd::max(nz, simd::splat(r.tnear)));
+    let hi = simd::min(simd::min(fx, fy), simd::min(fz, simd::splat(tfar)));
+    let hit = simd::bitmask(simd::le(lo, hi * simd::splat(SLAB_FAR_SCALE))) & node.valid();
+    (hit, simd::lanes(lo))
+}
+
+thread_local! {
+    /// Traversal stack of this thread, grown to the deepest tree seen (so a ray allocates
+    /// nothing and clears nothing).
+    pub(super) static STACK: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
+#[inline(always)]
+fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
+    let bvh: &Bvh8 = &accel.wide;
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    STACK.with_borrow_mut(|stack| {
+        // each node level leaves at most 7 entries behind, and pushes at most 8 at once.
+        let need = bvh.depth * 7 + 8;
+        if stack.len() < need {
+            stack.resize(need, (0, 0.0));
+        }
+        walk::<ANY_HIT>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack)
+    })
+}
+
+/// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
+/// nearest hit with `tnear < t < tfar`, or with `ANY_HIT` the first. `stack` holds at least
+/// `7 depth + 8` entries.
+#[inline(always)]
+pub(super) fn walk<const ANY_HIT: bool>(
+    accel: &Accel,
+    bvh: &Bvh8,
+    start: u32,
+    r: &RayWide,
+    mut tfar: f32,
+    cull: bool,
+    stack: &mut [(u32, f32)],
+) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    let mut sp = 0usize;
+    let mut cur = start;
+    loop {
+        if cur & LEAF_BIT == 0 {
+            let node = &bvh.nodes[cur as usize];
+            let (bits, lo) = hit_node1(node, r, tfar);
+            if bits != 0 {
+                if bits & (bits - 1) == 0 {
+                    // one child: descend.
+                    cur = node.child[bits.trailing_zeros() as usize];
+                    continue;
+                }
+                // several: push the hit ones farthest first in the octant's order (no
+                // branches: every slot is written, the pointer moves only for hit ones),
+                // then continue with the nearest.
+                let order = node.order[r.octant];
+                for k in (0..8).rev() {
+                    let slot = (order >> (3 * k) & 7) as usize;
+                    stack[sp] = (node.child[slot], lo[slot]);
+                    sp += (bits >> slot & 1) as usize;
+                }
+                sp -= 1;
+                cur = stack[sp].0;
+                continue;
+            }
+        } else {
+            let (first, count) = leaf_blocks(cur);
+            for b in &bvh.blocks[first..first + count] {
+                if let Some(h) = hit_block1(accel, b, r, tfar, cull) {
+                    if ANY_HIT {
+                        return Some(h);
+                    }
+                    // record hit: as in intersect1, the new limit is the next float above t
+                    // and an exact tie keeps the lower original triangle index.
+                    if best.is_none_or(|b| h.t < b.t || h.tri < b.tri) {
+                        best = Some(h);
+                        tfar = h.t.next_up();
+                    }
+                }
+            }
+        }
+        // pop the next node still in front of the closest hit.
+        loop {
+            if sp == 0 {
+                return best;
+            }
+            sp -= 1;
+            let (next, tentry) = stack[sp];
+            if tentry <= tfar * SLAB_FAR_SCALE {
+                cur = next;
+                break;
+            }
+        }
+    }
+}
+
+/// Closest hit with `tnear < t < tfar` on the wide tree; equals `intersect1` bit for bit.
+pub fn intersect_wide1(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
+    traverse_wide1::<false>(accel, ray, cull)
+}
+
+/// Whether anything is hit with `tnear < t < tfar` on the wide tree (shadow rays).
+pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
+    traverse_wide1::<true>(accel, ray, cull).is_some()
+}
+
+/// `intersect_wide1` on each active lane of a packet (how the wavefront renderer hands a
+/// queue's packets to the single-ray engine); inactive lanes report no hit.
+pub fn intersect_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
+    let mut hits = HitPacket8::none();
+    let mut bits = simd::bitmask(active);
+    if bits == 0 {
+        return hits;
+    }
+    let lanes = Lanes::of(rays);
+    let (mut tri, mut t, mut b1, mut b2) = (
+        simd::u32_lanes(hits.tri),
+        simd::lanes(hits.t),
+        simd::lanes(hits.b1),
+        simd::lanes(hits.b2),
+    );
+    while bits != 0 {
+        let i = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        if let Some(h) = traverse_wide1::<false>(accel, &lanes.ray(i), cull) {
+            (tri[i], t[i], b1[i], b2[i]) = (h.tri, h.t, h.b1, h.b2);
+        }
+    }
+    hits.tri = simd::u32_from_lanes(tri);
+    hits.t = simd::from_lanes(t);
+    hits.b1 = simd::from_lanes(b1);
+    hits.b2 = simd::from_lanes(b2);
+    hits
+}
+
+/// `occluded_wide1` on each active lane of a packet.
+pub fn occluded_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> M32x8 {
+    let mut bits = simd::bitmask(active);
+    let lanes = Lanes::of(rays);
+    let mut out = 0;
+    while bits != 0 {
+        let i = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        if traverse_wide1::<true>(accel, &lanes.ray(i), cull).is_some() {
+            out |= 1 << i;
+        }
+    }
+    simd::mask_from_bits(out)
+}
+
+/// A packet's lanes as plain arrays (one conversion for all lanes).
+pub(super) struct Lanes {
+    o: [[f32; 8]; 3],
+    d: [[f32; 8]; 3],
+    tnear: [f32; 8],
+    tfar: [f32; 8],
+}
+
+impl Lanes {
+    #[inline(always)]
+    pub(super) fn of(p: &RayPacket8) -> Lanes {
+        Lanes {
+            o: p.o.to_lanes(),
+            d: p.d.to_lanes(),
+            tnear: simd::lanes(p.tnear),
+            tfar: simd::lanes(p.tfar),
+        }
+    }
+    #[inline(always)]
+    pub(super) fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            glam::Vec3::new(self.o[0][i], self.o[1][i], self.o[2][i]),
+            glam::Vec3::new(self.d[0][i], self.d[1][i], self.d[2][i]),
+            self.tnear[i],
+            self.tfar[i],
+        )
+    }
+}

@@ -1,0 +1,246 @@
+//! The engines on a ray set: result buffers, one pass of an engine, results and checksums.
+
+use super::*;
+use crate::accel::{
+    Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8, occluded_hybrid8,
+    occluded_wide1, occluded1, occluded8,
+};
+use crate::packet::{HitPacket8, RayPacket8};
+use crate::ray::Hit;
+use crate::ray::Ray;
+use crate::simd::{self, M32x8};
+use rayon::prelude::*;
+
+// ---------------------------------------------------------------- kernels
+
+/// Rays grouped 8 consecutive per packet (the peer's `run_8`), padding lanes inactive.
+pub struct Packets {
+    pub rays: Vec<RayPacket8>,
+    pub active: Vec<M32x8>,
+    pub len: usize,
+}
+
+impl Packets {
+    pub fn new(rays: &[Ray]) -> Packets {
+        let (rays_, active) = rays
+            .chunks(8)
+            .map(|g| RayPacket8::from_fn(|i| g.get(i).copied()))
+            .unzip();
+        Packets {
+            rays: rays_,
+            active,
+            len: rays.len(),
+        }
+    }
+}
+
+/// What a pass leaves behind, per ray: the hit triangle (or `u32::MAX`) and `t`, or occlusion.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Results {
+    pub tri: Vec<u32>,
+    pub t: Vec<f32>,
+    pub occluded: Vec<bool>,
+}
+
+impl Results {
+    /// Rays that hit (closest-hit sets) or are occluded (shadow).
+    pub fn count(&self) -> usize {
+        self.tri.iter().filter(|&&t| t != u32::MAX).count()
+            + self.occluded.iter().filter(|&&o| o).count()
+    }
+
+    /// Order-dependent checksum of the results (ids, `t` bits, occlusion).
+    pub fn checksum(&self) -> u64 {
+        fnv1a(
+            self.tri
+                .iter()
+                .zip(&self.t)
+                .flat_map(|(i, t)| [i.to_le_bytes(), t.to_bits().to_le_bytes()])
+                .flatten()
+                .chain(self.occluded.iter().map(|&o| o as u8)),
+        )
+    }
+}
+
+/// Output buffers of one engine on one set, written in place by every pass (as the peer
+/// writes its result arrays): per ray `(triangle, t)` or occlusion, per packet a
+/// `HitPacket8` or an occlusion bitmask; beside each, the engine's kernel.
+pub enum Out {
+    Hits(Vec<(u32, f32)>, Intersect1),
+    Occ(Vec<bool>, Occluded1),
+    Hits8(Vec<HitPacket8>, Intersect8),
+    Occ8(Vec<u8>, Occluded8),
+}
+
+/// A single-ray closest-hit kernel (`intersect1`, `intersect_wide1`).
+pub type Intersect1 = fn(&Accel, &Ray, bool) -> Option<Hit>;
+/// A single-ray any-hit kernel.
+pub type Occluded1 = fn(&Accel, &Ray, bool) -> bool;
+/// A packet closest-hit kernel (`intersect8`, `intersect_hybrid8`).
+pub type Intersect8 = fn(&Accel, &RayPacket8, M32x8, bool) -> HitPacket8;
+/// A packet any-hit kernel.
+pub type Occluded8 = fn(&Accel, &RayPacket8, M32x8, bool) -> M32x8;
+
+/// The engines timed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Engine {
+    /// `intersect1` / `occluded1` on the binary tree, ray by ray (the reference).
+    Scalar,
+    /// `intersect8` / `occluded8` on the binary tree, 8 consecutive rays.
+    Packet,
+    /// `intersect_wide1` / `occluded_wide1` on the 8-wide tree, ray by ray.
+    Wide,
+    /// `intersect_hybrid8` / `occluded_hybrid8`: packets on the binary tree, single rays on
+    /// the wide tree once few lanes remain.
+    Hybrid,
+}
+
+impl Engine {
+    /// Every engine, in report order.
+    pub const ALL: [Engine; 4] = [Engine::Scalar, Engine::Packet, Engine::Wide, Engine::Hybrid];
+
+    /// The engine's key in tables and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::Scalar => "scalar",
+            Engine::Packet => "packet8",
+            Engine::Wide => "wide1",
+            Engine::Hybrid => "hybrid8",
+        }
+    }
+
+    /// Packet engines are compared with Embree's 8- and 16-wide packets, single-ray ones
+    /// with its single rays.
+    pub fn packet(self) -> bool {
+        matches!(self, Engine::Packet | Engine::Hybrid)
+    }
+}
+
+fn hits1(accel: &Accel, f: Intersect1, rays: &[Ray], out: &mut [(u32, f32)]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = f(accel, r, false).map_or((u32::MAX, f32::INFINITY), |h| (h.tri, h.t));
+    }
+}
+
+fn occ1(accel: &Accel, f: Occluded1, rays: &[Ray], out: &mut [bool]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = f(accel, r, false);
+    }
+}
+
+fn hits8(
+    accel: &Accel,
+    f: Intersect8,
+    rays: &[RayPacket8],
+    active: &[M32x8],
+    out: &mut [HitPacket8],
+) {
+    for ((r, a), o) in rays.iter().zip(active).zip(out) {
+        *o = f(accel, r, *a, false);
+    }
+}
+
+fn occ8(accel: &Accel, f: Occluded8, rays: &[RayPacket8], active: &[M32x8], out: &mut [u8]) {
+    for ((r, a), o) in rays.iter().zip(active).zip(out) {
+        *o = simd::bitmask(f(accel, r, *a, false)) as u8;
+    }
+}
+
+/// One pass of an engine over a set, in place; with a pool, chunks of [`CHUNK`] rays in
+/// parallel (the peer's threads pull 4096-ray chunks from a shared counter).
+pub fn pass(
+    accel: &Accel,
+    rays: &[Ray],
+    packets: &Packets,
+    out: &mut Out,
+    pool: Option<&rayon::ThreadPool>,
+) {
+    let (pr, pa) = (&packets.rays[..], &packets.active[..]);
+    let Some(pool) = pool else {
+        match out {
+            Out::Hits(o, f) => hits1(accel, *f, rays, o),
+            Out::Occ(o, f) => occ1(accel, *f, rays, o),
+            Out::Hits8(o, f) => hits8(accel, *f, pr, pa, o),
+            Out::Occ8(o, f) => occ8(accel, *f, pr, pa, o),
+        }
+        return;
+    };
+    const P: usize = CHUNK / 8;
+    pool.install(|| match out {
+        Out::Hits(o, f) => o
+            .par_chunks_mut(CHUNK)
+            .zip(rays.par_chunks(CHUNK))
+            .for_each(|(o, r)| hits1(accel, *f, r, o)),
+        Out::Occ(o, f) => o
+            .par_chunks_mut(CHUNK)
+            .zip(rays.par_chunks(CHUNK))
+            .for_each(|(o, r)| occ1(accel, *f, r, o)),
+        Out::Hits8(o, f) => o
+            .par_chunks_mut(P)
+            .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
+            .for_each(|(o, (r, a))| hits8(accel, *f, r, a, o)),
+        Out::Occ8(o, f) => o
+            .par_chunks_mut(P)
+            .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
+            .for_each(|(o, (r, a))| occ8(accel, *f, r, a, o)),
+    })
+}
+
+impl Out {
+    /// Buffers for `engine` on `rays`, closest hit or any hit.
+    pub fn new(engine: Engine, any_hit: bool, rays: &[Ray]) -> Out {
+        let packets = rays.len().div_ceil(8);
+        let (hits, occ) = (vec![(0, 0.0); rays.len()], vec![false; rays.len()]);
+        let (hits8, occ8) = (vec![HitPacket8::none(); packets], vec![0; packets]);
+        match (engine, any_hit) {
+            (Engine::Scalar, false) => Out::Hits(hits, intersect1),
+            (Engine::Scalar, true) => Out::Occ(occ, occluded1),
+            (Engine::Packet, false) => Out::Hits8(hits8, intersect8),
+            (Engine::Packet, true) => Out::Occ8(occ8, occluded8),
+            (Engine::Wide, false) => Out::Hits(hits, intersect_wide1),
+            (Engine::Wide, true) => Out::Occ(occ, occluded_wide1),
+            (Engine::Hybrid, false) => Out::Hits8(hits8, intersect_hybrid8),
+            (Engine::Hybrid, true) => Out::Occ8(occ8, occluded_hybrid8),
+        }
+    }
+
+    /// The results of the last pass over `n` rays.
+    pub fn results(&self, n: usize) -> Results {
+        results_of(self, n)
+    }
+}
+
+pub(super) fn results_of(out: &Out, n: usize) -> Results {
+    match out {
+        Out::Hits(h, _) => Results {
+            tri: h.iter().map(|h| h.0).collect(),
+            t: h.iter().map(|h| h.1).collect(),
+            occluded: vec![],
+        },
+        Out::Occ(o, _) => Results {
+            occluded: o.clone(),
+            ..Default::default()
+        },
+        Out::Hits8(h, _) => {
+            let hits: Vec<(u32, f32)> = h
+                .iter()
+                .flat_map(|p| {
+                    (0..8).map(|i| {
+                        p.lane(i)
+                            .map_or((u32::MAX, f32::INFINITY), |h| (h.tri, h.t))
+                    })
+                })
+                .take(n)
+                .collect();
+            results_of(&Out::Hits(hits, intersect1), n)
+        }
+        Out::Occ8(o, _) => Results {
+            occluded: o
+                .iter()
+                .flat_map(|b| (0..8).map(move |i| b >> i & 1 == 1))
+                .take(n)
+                .collect(),
+            ..Default::default()
+        },
+    }
+}

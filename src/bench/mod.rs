@@ -1,0 +1,172 @@
+//! Throughput on the Embree peer's workloads (`whitted bench`, `benches/`), side by side with it.
+//!
+//! The peer is `rt-bench` (`shared/peers/embree`). Its workloads are reproduced here from its
+//! source, step for step in the same f64 arithmetic and order:
+//! - the mesh: loaded, then midpoint-subdivided with the peer's vertex numbering and child
+//!   order ([`subdivide_like_peer`]), so both trace the very same triangles;
+//! - the camera: the canonical kitten view, or the same view scaled onto another mesh's box;
+//! - **primary**: 1920x1080 pixel-centre rays in 4x4 pixel blocks (an 8-ray packet is the top
+//!   or bottom 4x2 half of a block), bit for bit the peer's rays;
+//! - **primary-hits-only**: the primary rays that hit, in block order;
+//! - **shadow**: from each primary hit towards the light L1, origin pushed `eps` off the
+//!   surface on the light's side, `tfar` one ulp short of the light (any hit);
+//! - **incoherent**: one uniform hemisphere direction about the geometric normal per hit
+//!   (splitmix64, seed 1234567), origin pushed `eps` to the viewer's side (closest hit).
+//!
+//! The secondary sets are built from whitted's *own* primary hits (`t` and the triangle's
+//! normal). Embree computes `t` with a different (unpublished) formula, so these two sets agree
+//! with Embree's to about one ulp per ray, not bit for bit; fed Embree's `(prim, t, Ng)` the
+//! same code reproduces Embree's sets exactly ([`secondary_rays`]).
+
+mod kernels;
+mod peer;
+mod report;
+mod timing;
+mod workloads;
+
+pub use kernels::*;
+pub use peer::*;
+pub use report::*;
+pub use timing::*;
+pub use workloads::*;
+
+use crate::accel::BuildQuality;
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------- `whitted bench`
+
+/// Options of `whitted bench`.
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// Meshes (`.m` or `.obj`); default `meshes/kitten.m` under `WHITTED_ASSETS`.
+    pub meshes: Vec<PathBuf>,
+    /// Tracing threads (also the peer's `--threads`); 1 traces on the calling thread.
+    #[cfg_attr(feature = "cli", arg(long, short = 't', default_value_t = 1))]
+    pub threads: usize,
+    /// Midpoint subdivision levels (x4 triangles each, the peer's vertex and child order).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 0))]
+    pub subdivide: u32,
+    /// Image width of the camera workloads (also the peer's `--width`).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = WIDTH))]
+    pub width: u32,
+    /// Image height of the camera workloads (also the peer's `--height`).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = HEIGHT))]
+    pub height: u32,
+    /// Timed passes per workload after one warm-up (best and median are reported).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 5))]
+    pub reps: usize,
+    /// Print one JSON object instead of tables.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
+    /// The Embree peer binary (default: `$WHITTED_PEER`, else `rt-bench` on `PATH`).
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub peer: Option<PathBuf>,
+    /// Do not run the peer even when it is found.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub no_peer: bool,
+    /// whitted's BVH build preset: fast, medium or slow (default: the renderer's). The peer
+    /// always builds at Embree's MEDIUM.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub quality: Option<String>,
+}
+
+pub const MAX_SUBDIVIDE: u32 = 6;
+pub const MAX_TRIANGLES: u64 = 1 << 25;
+/// Cap of `whitted bench --width x --height` (8K is 2^25).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Load, subdivide, build, generate and time one mesh (and run the peer on it).
+pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
+    let (mesh, _warnings) = crate::io::load_mesh(path)?;
+    if opts.subdivide > MAX_SUBDIVIDE
+        || (mesh.triangles.len() as u64) << (2 * opts.subdivide.min(MAX_SUBDIVIDE)) > MAX_TRIANGLES
+    {
+        return Err(crate::Error::Usage(format!(
+            "--subdivide {}: over the cap ({MAX_SUBDIVIDE} levels, {MAX_TRIANGLES} triangles)",
+            opts.subdivide
+        )));
+    }
+    // 0 (the `Default` of `Options`) means the peer's default size.
+    let width = if opts.width == 0 { WIDTH } else { opts.width };
+    let height = if opts.height == 0 {
+        HEIGHT
+    } else {
+        opts.height
+    };
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(crate::Error::Usage(format!(
+            "--width {width} --height {height}: over the cap of {MAX_PIXELS} pixels"
+        )));
+    }
+    let mesh = subdivide_like_peer(&mesh, opts.subdivide);
+    let tris = triangles(&mesh);
+    let threads = opts.threads.max(1);
+    let reps = opts.reps.clamp(1, 64);
+    let quality = match opts.quality.as_deref() {
+        None => BuildQuality::default(),
+        Some("fast") => BuildQuality::Fast,
+        Some("medium") => BuildQuality::Medium,
+        Some("slow") => BuildQuality::Slow,
+        Some(q) => {
+            return Err(crate::Error::Usage(format!(
+                "--quality {q}: expected fast, medium or slow"
+            )));
+        }
+    };
+    let (accel, build) = time_build(&tris, reps, quality);
+    let work = Workloads::generate(&mesh, &accel, width, height);
+    let measured = measure(&accel, &work, threads, reps);
+    let peer = if opts.no_peer {
+        Err("not run (--no-peer)".to_string())
+    } else {
+        match find_peer(opts.peer.as_deref()) {
+            None => Err("rt-bench not found (PATH, --peer or WHITTED_PEER)".to_string()),
+            Some(p) => {
+                run_peer(&p, path, threads, opts.subdivide, reps, (width, height)).map(|r| r.0)
+            }
+        }
+    };
+    Ok(Report {
+        mesh: path.to_path_buf(),
+        subdivide: opts.subdivide,
+        vertices: mesh.positions.len(),
+        triangles: mesh.triangles.len(),
+        threads,
+        reps,
+        framing: work.framing,
+        width: work.width,
+        height: work.height,
+        build,
+        wide_bytes: accel.wide.bytes(),
+        collapse_ms: accel.collapse_time.as_secs_f64() * 1e3,
+        measured,
+        peer,
+    })
+}
+
+/// `whitted bench`: every mesh, tables or one JSON object on stdout.
+pub fn run(opts: &Options) -> crate::Result<()> {
+    let mut meshes = opts.meshes.clone();
+    if meshes.is_empty() {
+        let dir = std::env::var_os("WHITTED_ASSETS")
+            .and_then(|v| std::env::split_paths(&v).next())
+            .ok_or_else(|| {
+                crate::Error::Usage("no mesh given and WHITTED_ASSETS is not set".into())
+            })?;
+        meshes.push(dir.join("meshes/kitten.m"));
+    }
+    let mut reports = vec![];
+    for m in &meshes {
+        let r = bench_mesh(m, opts)?;
+        if opts.json {
+            reports.push(report_json(&r));
+        } else {
+            println!("{}", format_report(&r));
+        }
+    }
+    if opts.json {
+        println!("{}", serde_json::json!({ "whitted_bench": reports }));
+    }
+    Ok(())
+}

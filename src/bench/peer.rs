@@ -1,0 +1,162 @@
+//! The Embree peer (`rt-bench`): finding it, running it, parsing its output.
+
+use super::*;
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------- the peer's output
+
+/// One kernel line of rt-bench: `  {label} {rays} rays  wall best {b} med {m} | cpu best .. med ..`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PeerKernel {
+    pub workload: Workload,
+    /// Rays per call: 1, 8 or 16.
+    pub width: u32,
+    pub rays: usize,
+    pub wall_best: f64,
+    pub wall_median: f64,
+    pub cpu_best: f64,
+    pub cpu_median: f64,
+}
+
+/// What rt-bench printed for one build quality.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PeerReport {
+    /// `embree 3.13.5, device config ...` line.
+    pub version: String,
+    pub triangles: Option<usize>,
+    pub camera: String,
+    /// Build time in ms, wall best / median.
+    pub build_best_ms: Option<f64>,
+    pub build_median_ms: Option<f64>,
+    pub kernels: Vec<PeerKernel>,
+    pub primary_hits: Option<usize>,
+    pub mismatches: Option<usize>,
+    pub occluded: Option<usize>,
+    pub incoherent_hits: Option<usize>,
+}
+
+impl PeerReport {
+    pub fn kernel(&self, w: Workload, width: u32) -> Option<&PeerKernel> {
+        self.kernels
+            .iter()
+            .find(|k| k.workload == w && k.width == width)
+    }
+}
+
+/// Parse rt-bench's text output (the first build quality only; run it with
+/// `--quality medium`). Kernel lines are the 2-space indented ones with `rays  wall best`.
+pub fn parse_peer(text: &str) -> Result<PeerReport, String> {
+    let mut p = PeerReport::default();
+    let num = |s: &str| s.parse::<f64>().map_err(|e| format!("'{s}': {e}"));
+    let first_int = |s: &str| -> Option<usize> { s.split_whitespace().next()?.parse().ok() };
+    let mut builds = 0;
+    for line in text.lines() {
+        if let Some(rest) = line.strip_prefix("mesh ") {
+            // mesh PATH subdivide K: V vertices, T triangles (load ..)
+            p.triangles = rest
+                .rsplit_once(" vertices, ")
+                .and_then(|(_, t)| first_int(t));
+        } else if line.starts_with("embree ") {
+            p.version = line.to_string();
+        } else if let Some(rest) = line.strip_prefix("camera ") {
+            p.camera = rest.split(':').next().unwrap_or("").to_string();
+        } else if let Some(rest) = line.strip_prefix("build ") {
+            builds += 1;
+            if builds > 1 {
+                break; // a second quality follows; keep the first
+            }
+            let w: Vec<&str> = rest.split_whitespace().collect();
+            let at = |key: &str| w.iter().position(|x| *x == key).and_then(|i| w.get(i + 1));
+            p.build_best_ms = at("best").and_then(|s| s.parse().ok());
+            p.build_median_ms = at("median").and_then(|s| s.parse().ok());
+        } else if let Some(rest) = line.trim_start().strip_prefix("primary hits ") {
+            p.primary_hits = first_int(rest);
+            p.mismatches = rest
+                .rsplit_once("mismatches ")
+                .and_then(|(_, m)| first_int(m));
+        } else if let Some(rest) = line.trim_start().strip_prefix("occluded ") {
+            p.occluded = first_int(rest);
+        } else if let Some(rest) = line.trim_start().strip_prefix("incoherent hits ") {
+            p.incoherent_hits = first_int(rest);
+        } else if line.starts_with("  ") && line.contains(" rays  wall best ") {
+            let (head, tail) = line.split_once(" rays  wall best ").unwrap();
+            let head: Vec<&str> = head.split_whitespace().collect();
+            if head.len() < 3 {
+                return Err(format!("kernel line: {line}"));
+            }
+            let workload = Workload::from_name(head[0])
+                .ok_or_else(|| format!("unknown workload '{}' in: {line}", head[0]))?;
+            let width: u32 = head[1]
+                .trim_start_matches(|c: char| !c.is_ascii_digit())
+                .parse()
+                .map_err(|_| format!("kernel width in: {line}"))?;
+            let rays: usize = head[head.len() - 1]
+                .parse()
+                .map_err(|_| format!("ray count in: {line}"))?;
+            // "{b} med {m} | cpu best {cb} med {cm} Mrays/s"
+            let v: Vec<&str> = tail.split_whitespace().collect();
+            if v.len() < 8 {
+                return Err(format!("kernel line: {line}"));
+            }
+            p.kernels.push(PeerKernel {
+                workload,
+                width,
+                rays,
+                wall_best: num(v[0])?,
+                wall_median: num(v[2])?,
+                cpu_best: num(v[6])?,
+                cpu_median: num(v[8.min(v.len() - 1)])?,
+            });
+        }
+    }
+    if p.kernels.is_empty() {
+        return Err("no kernel lines in rt-bench's output".into());
+    }
+    Ok(p)
+}
+
+/// The peer binary: `explicit`, else `$WHITTED_PEER`, else `rt-bench` on `PATH`.
+pub fn find_peer(explicit: Option<&Path>) -> Option<PathBuf> {
+    if let Some(p) = explicit {
+        return Some(p.to_path_buf());
+    }
+    if let Some(p) = std::env::var_os("WHITTED_PEER").filter(|p| !p.is_empty()) {
+        return Some(PathBuf::from(p));
+    }
+    std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|d| d.join("rt-bench"))
+            .find(|p| p.is_file())
+    })
+}
+
+/// Run the peer on `mesh` with the same options (`--quality medium`) and parse its output.
+pub fn run_peer(
+    peer: &Path,
+    mesh: &Path,
+    threads: usize,
+    subdivide: u32,
+    reps: usize,
+    (width, height): (u32, u32),
+) -> Result<(PeerReport, String), String> {
+    let out = std::process::Command::new(peer)
+        .arg(mesh)
+        .args(["--width", &width.to_string()])
+        .args(["--height", &height.to_string()])
+        .args(["--threads", &threads.to_string()])
+        .args(["--subdivide", &subdivide.to_string()])
+        .args(["--reps", &reps.to_string()])
+        .args(["--quality", "medium"])
+        .output()
+        .map_err(|e| format!("{}: {e}", peer.display()))?;
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    if !out.status.success() {
+        return Err(format!(
+            "{} exited with {}: {}",
+            peer.display(),
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    parse_peer(&text).map(|p| (p, text))
+}

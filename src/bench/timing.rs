@@ -1,0 +1,127 @@
+//! Timing passes and builds: best and median, wall clock and CPU time.
+
+use super::*;
+use crate::accel::{Accel, BuildQuality};
+use glam::Vec3;
+use std::path::Path;
+use std::time::Instant;
+
+/// Best and median of timed passes (the peer's `median = sorted[reps / 2]`), wall-clock and
+/// CPU seconds (of this thread with one thread, of all the process's threads otherwise).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timing {
+    pub wall_best: f64,
+    pub wall_median: f64,
+    pub cpu_best: Option<f64>,
+    pub cpu_median: Option<f64>,
+}
+
+impl Timing {
+    fn of(mut wall: Vec<f64>, cpu: Vec<Option<f64>>) -> Timing {
+        wall.sort_by(f64::total_cmp);
+        let mut cpu: Option<Vec<f64>> = cpu.into_iter().collect();
+        if let Some(c) = &mut cpu {
+            c.sort_by(f64::total_cmp);
+        }
+        let m = wall.len() / 2;
+        Timing {
+            wall_best: wall[0],
+            wall_median: wall[m],
+            cpu_best: cpu.as_ref().map(|c| c[0]),
+            cpu_median: cpu.as_ref().map(|c| c[m]),
+        }
+    }
+
+    /// Millions of items per second for `n` items: `(wall best, wall median, cpu best)`.
+    pub fn rate(&self, n: usize) -> (f64, f64, Option<f64>) {
+        let r = |s: f64| n as f64 / s / 1e6;
+        (r(self.wall_best), r(self.wall_median), self.cpu_best.map(r))
+    }
+}
+
+/// CPU time in seconds: this thread's (`all = false`) or the whole process's, from
+/// `/proc/.../schedstat` (nanoseconds on CPU; Linux only, `None` elsewhere).
+pub fn cpu_seconds(all: bool) -> Option<f64> {
+    let read = |p: &Path| -> Option<u64> {
+        std::fs::read_to_string(p)
+            .ok()?
+            .split_whitespace()
+            .next()?
+            .parse()
+            .ok()
+    };
+    let ns = if all {
+        let mut sum = 0;
+        for e in std::fs::read_dir("/proc/self/task").ok()? {
+            sum += read(&e.ok()?.path().join("schedstat"))?;
+        }
+        sum
+    } else {
+        read(Path::new("/proc/thread-self/schedstat"))?
+    };
+    Some(ns as f64 * 1e-9)
+}
+
+/// Time `f` after one untimed warm-up call: `reps` timed calls.
+pub fn time_reps(reps: usize, threads: usize, mut f: impl FnMut()) -> Timing {
+    f();
+    let (mut wall, mut cpu) = (vec![], vec![]);
+    for _ in 0..reps.max(1) {
+        let c0 = cpu_seconds(threads > 1);
+        let t0 = Instant::now();
+        f();
+        wall.push(t0.elapsed().as_secs_f64());
+        let c1 = cpu_seconds(threads > 1);
+        cpu.push(c0.zip(c1).map(|(a, b)| b - a));
+    }
+    Timing::of(wall, cpu)
+}
+
+/// One engine on one set.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    pub workload: Workload,
+    pub engine: Engine,
+    pub rays: usize,
+    pub timing: Timing,
+    pub results: Results,
+}
+
+/// Time both engines on every workload (`reps` passes after a warm-up each), on the calling
+/// thread (`threads <= 1`) or on a pool of `threads`.
+pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> Vec<Measured> {
+    let pool = (threads > 1).then(|| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool")
+    });
+    let mut all = vec![];
+    for (workload, rays) in work.sets() {
+        let packets = Packets::new(rays);
+        for engine in Engine::ALL {
+            let mut out = Out::new(engine, workload.any_hit(), rays);
+            let timing = time_reps(reps, threads, || {
+                pass(accel, rays, &packets, &mut out, pool.as_ref())
+            });
+            all.push(Measured {
+                workload,
+                engine,
+                rays: rays.len(),
+                timing,
+                results: results_of(&out, rays.len()),
+            });
+        }
+    }
+    all
+}
+
+/// BVH build time over `tris` (whitted's default quality), best and median of `reps` builds
+/// after a warm-up. obvhs builds on one thread.
+pub fn time_build(tris: &[[Vec3; 3]], reps: usize, quality: BuildQuality) -> (Accel, Timing) {
+    let mut accel = Accel::default();
+    let t = time_reps(reps, 1, || {
+        accel = Accel::build(tris, quality);
+    });
+    (accel, t)
+}
