@@ -34,12 +34,19 @@ impl Scene {
     }
 
     /// A TOML scene file, validated, with every file it names loaded (relative names resolve
-    /// as [`SearchPath::for_scene`] says). Loader warnings are dropped; [`SceneFile::load`]
-    /// and [`build_scene`] return them.
+    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`),
+    /// framed at 1024x768 as `whitted render model.obj` frames it (see
+    /// [`scene_for_mesh`](crate::io::mesh_scene::scene_for_mesh)). Loader warnings are
+    /// dropped; [`SceneFile::load`] and [`build_scene`] return them.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene> {
         let path = path.as_ref();
-        let file = SceneFile::load(path)?;
-        build_scene(&file, path, &SearchPath::for_scene(path.parent())).map(|(s, _)| s)
+        let (file, dir) = if crate::io::mesh_scene::is_mesh_file(path) {
+            let (file, _) = crate::io::mesh_scene::scene_for_mesh(path, 1024, 768)?;
+            (file, None)
+        } else {
+            (SceneFile::load(path)?, path.parent())
+        };
+        build_scene(&file, path, &SearchPath::for_scene(dir)).map(|(s, _)| s)
     }
 
     /// Render the scene at its `width` x `height` (which may be changed after loading;

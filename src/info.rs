@@ -67,6 +67,12 @@ pub fn info(path: &Path) -> Result<Info> {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
             let mut info = mesh_fields(&mesh, &ext, file_normals);
             info.warnings = warnings;
+            if ext == "obj" {
+                // The materials its mtllib files bring (name, illum, colours, textures found).
+                let (model, warnings) = crate::io::obj::load_obj_model(path)?;
+                info.fields.push(("materials", json!(model.material_info)));
+                info.warnings = warnings;
+            }
             Ok(info)
         }
         "toml" => scene_info(path),

@@ -25,9 +25,9 @@ enum Command {
     /// Render a built-in scene (phong, vertex_color, texture, cubemap, refraction, demo) or a
     /// scene file; with no scene, the demo (needs no files).
     Render(RenderArgs),
-    /// Print a built-in scene as an editable TOML file.
+    /// Print a built-in scene, or the scene `render` gives a mesh file, as editable TOML.
     Scene {
-        /// phong, vertex_color, texture, cubemap, refraction or demo.
+        /// phong, vertex_color, texture, cubemap, refraction, demo, or a .obj/.ply/.m file.
         name: String,
     },
     /// Describe a mesh, scene, image or cube-map folder after validating it.
@@ -108,7 +108,8 @@ struct TraceArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Built-in scene name or path to a `.toml` scene file.
+    /// Built-in scene name, a `.toml` scene file, or a mesh (`.obj`, `.ply`, `.m`) to render
+    /// alone (framed from the canonical direction, canonical lights or its emitters).
     scene: Option<String>,
     /// Render one stage of the assignment: intersection, diffuse, specular, shadow, reflection.
     #[arg(long)]
@@ -142,6 +143,14 @@ struct RenderArgs {
     /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
     #[arg(long)]
     stats: bool,
+    /// Override a scene value by its TOML path, e.g. `-D camera.vfov=30`,
+    /// `-D 'light[0].intensity=[1,1,1]'`, `-D render.depth=4` (repeatable, applied in order).
+    #[arg(short = 'D', value_name = "KEY=VALUE")]
+    define: Vec<String>,
+    /// Extra first-hit layers in the EXR beside the beauty image: any of albedo, normal,
+    /// depth, id (comma-separated; needs `-o file.exr`).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
     /// Render only a crop window, as fractions of the image: x0,x1,y0,y1 (pbrt's
     /// --cropwindow; pixels ceil(width x0)..ceil(width x1), the same in y).
     #[arg(
@@ -308,6 +317,17 @@ fn load_scene_file(arg: &str) -> Result<(SceneFile, PathBuf, Option<PathBuf>)> {
 }
 
 fn cmd_scene(name: &str) -> Result<()> {
+    if whitted::io::mesh_scene::is_mesh_file(Path::new(name)) {
+        let (s, warnings) = whitted::io::mesh_scene::scene_for_mesh(Path::new(name), 1024, 768)?;
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
+        print!(
+            "# whitted scene for the mesh '{name}': `whitted render {name}` renders this.\n# Lights: the canonical ones scaled to the model, or none when its materials emit\n# (emitters light the scene themselves). Materials: the file's, mapped from MTL.\n{}",
+            s.to_toml()
+        );
+        return Ok(());
+    }
     let s = scenes::builtin(name).ok_or_else(|| {
         Error::Usage(format!(
             "no built-in scene '{name}' (try {})",
@@ -323,7 +343,16 @@ fn cmd_scene(name: &str) -> Result<()> {
 
 fn cmd_render(args: RenderArgs) -> Result<()> {
     let name = args.scene.clone().unwrap_or_else(|| "demo".into());
-    let (mut file, path, dir) = load_scene_file(&name)?;
+    let (file, path, dir) = if whitted::io::mesh_scene::is_mesh_file(Path::new(&name)) {
+        // A mesh alone: framed for the requested size; build_scene reports the warnings.
+        let size = (args.width.unwrap_or(1024), args.height.unwrap_or(768));
+        check_size(size.0, size.1).map_err(Error::Usage)?;
+        let (file, _) = whitted::io::mesh_scene::scene_for_mesh(Path::new(&name), size.0, size.1)?;
+        (file, PathBuf::from(&name), None)
+    } else {
+        load_scene_file(&name)?
+    };
+    let mut file = file.with_overrides(&args.define)?;
     if let Some(w) = args.width {
         file.image.width = w;
     }
@@ -364,6 +393,21 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             out.display()
         )));
     }
+    let aovs = match &args.aov {
+        None => None,
+        Some(list) => {
+            let aovs = whitted::aov::Aov::parse_list(list)
+                .map_err(|m| Error::Usage(format!("--aov {list}: {m}")))?;
+            if whitted::io::extension(&out) != "exr" {
+                return Err(Error::Usage(format!(
+                    "--aov {list}: AOV layers are written into an EXR beside the beauty image; {} is not .exr (use -o {}.exr)",
+                    out.display(),
+                    out.with_extension("").display()
+                )));
+            }
+            Some(aovs)
+        }
+    };
     check_subdivide(args.subdivide)?;
     let engine = parse_engine(&args.engine)?;
     set_threads(args.threads)?;
@@ -371,8 +415,36 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let part_arg = args.part()?;
     let part = part_arg.bounds(w, h).map_err(Error::Usage)?;
     let exr = parse_exr_options(args.half, &args.exr_compression)?;
+    if let (Some(list), Some(_)) = (&args.aov, &aovs) {
+        // The AOV layers are captured over the whole image and written by their own EXR writer.
+        if !part_arg.is_full() {
+            return Err(Error::Usage(format!(
+                "--aov {list}: AOV layers are written for the whole image only, not with --crop, --pixel-bounds or --tile"
+            )));
+        }
+        if exr != whitted::io::output::ExrOptions::default() {
+            return Err(Error::Usage(format!(
+                "--aov {list}: the AOV EXR is written in 32-bit floats with its own compression; --half and --exr-compression do not apply"
+            )));
+        }
+    }
 
-    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))?;
+    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
+        .map_err(|e| {
+        // A value set by -D names the argument too.
+        let msg = e.to_string();
+        match whitted::io::scene_file::overrides_named(&msg, &args.define)[..] {
+            [] => e,
+            ref named => Error::Usage(format!(
+                "{msg} (set by {})",
+                named
+                    .iter()
+                    .map(|d| format!("-D '{d}'"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        }
+    })?;
     check_subdivided_triangles(args.subdivide, scene.triangle_count() as u64)?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);
@@ -414,20 +486,45 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         );
         b
     };
-    // Rows stream into the file as bands finish; a failed render leaves no file behind.
-    let mut stats = None;
-    let wrote = whitted::io::output::write_streamed(&out, (w, h), part, exr, &mut |sink| {
-        let s = whitted::render::render_rows(&world, &settings, part, &|n| bar.inc(n), sink)?;
-        let over = s.budget_error(&world, &settings);
-        stats = Some(s);
-        match over {
-            None => Ok(()),
-            Some(msg) => Err(Error::scene(&path, msg)),
+    let stats = match &aovs {
+        // Rows stream into the file as bands finish; a failed render leaves no file behind.
+        None => {
+            let mut stats = None;
+            let wrote = whitted::io::output::write_streamed(&out, (w, h), part, exr, &mut |sink| {
+                let s =
+                    whitted::render::render_rows(&world, &settings, part, &|n| bar.inc(n), sink)?;
+                let over = s.budget_error(&world, &settings);
+                stats = Some(s);
+                match over {
+                    None => Ok(()),
+                    Some(msg) => Err(Error::scene(&path, msg)),
+                }
+            });
+            bar.finish_and_clear();
+            wrote?;
+            stats.expect("the render ran")
         }
-    });
-    bar.finish_and_clear();
-    wrote?;
-    let stats = stats.expect("the render ran");
+        // The beauty image in memory, then one EXR with the AOV layers beside it (written
+        // through a temporary file too).
+        Some(aovs) => {
+            let (image, stats) = whitted::render::render(&world, &settings, &|n| bar.inc(n));
+            bar.finish_and_clear();
+            if let Some(msg) = stats.budget_error(&world, &settings) {
+                return Err(Error::scene(&path, msg));
+            }
+            let aov_time = std::time::Instant::now();
+            let layers = whitted::aov::capture(&world, aovs);
+            if !args.quiet {
+                eprintln!(
+                    "AOVs {} captured in {:.3} s",
+                    aovs.iter().map(|a| a.name()).collect::<Vec<_>>().join(","),
+                    aov_time.elapsed().as_secs_f64()
+                );
+            }
+            whitted::io::aov::save_exr_with_aovs(&image, &layers, &out)?;
+            stats
+        }
+    };
     if !args.quiet {
         let r = &stats.rays;
         let total = r.total();

@@ -246,26 +246,28 @@ fn canonical_scenes_render_from_another_folder_without_whitted_assets() {
     }
 }
 
-/// A mesh given where a scene is expected says so and how to make a scene, instead of a TOML
-/// error; `whitted info` on a type it does not read lists the types it does.
+/// An image given where a scene is expected says so and how to make a scene, instead of a
+/// TOML error (a mesh is rendered on its own: issue 12); `whitted info` on a type it does not
+/// read lists the types it does.
 #[test]
 fn wrong_file_types_say_what_is_expected() {
-    let ply = tmp("x.ply");
-    std::fs::write(&ply, "ply\nformat ascii 1.0\nend_header\n").unwrap();
-    let cube = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let stl = tmp("x.stl");
+    std::fs::write(&stl, "solid x\nendsolid x\n").unwrap();
+    let png = tmp("x.png");
+    image::RgbImage::new(2, 2).save(&png).unwrap();
     let cases = [
         (
-            vec!["render".to_string(), cube.display().to_string()],
+            vec!["render".to_string(), png.display().to_string()],
             vec![
-                "cube.obj: this is a mesh (.obj), but a scene file (.toml) is expected",
+                "x.png: this is an image (.png), but a scene file (.toml) is expected",
                 "`whitted scene phong > my.toml`",
                 "`whitted render my.toml`",
             ],
         ),
         (
-            vec!["info".to_string(), ply.display().to_string()],
+            vec!["info".to_string(), stl.display().to_string()],
             vec![
-                "x.ply: not a file type whitted reads; it reads meshes (.m, .obj), scenes (.toml)",
+                "x.stl: not a file type whitted reads; it reads meshes (.m, .obj, .ply), scenes (.toml)",
             ],
         ),
     ];

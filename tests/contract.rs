@@ -306,18 +306,31 @@ fn shade8_lanes_equal_the_scalar_shading_bit_for_bit() {
     use whitted::simd;
     let bits3 = |v: Vec3| v.to_array().map(f32::to_bits);
     let mut lanes_checked = 0;
-    for (name, odd_exponent) in [
-        ("phong", false),
-        ("phong", true),
-        ("vertex_color", false),
-        ("texture", false),
-        ("cubemap", false),
-        ("refraction", true),
-        ("demo", false),
+    for (name, odd_exponent, rgb) in [
+        ("phong", false, false),
+        ("phong", true, false),
+        ("phong", false, true),
+        ("vertex_color", false, false),
+        ("texture", false, false),
+        ("cubemap", false, false),
+        ("refraction", true, false),
+        ("refraction", false, true),
+        ("demo", false, false),
     ] {
         let mut w = world(name, 64, 48);
         if odd_exponent {
             w.scene.materials[0].n = 33.3;
+        }
+        if rgb {
+            // RGB coefficients that differ per channel, a separate reflection weight and an
+            // emitting material (one channel zero, so masks see mixed channels).
+            let m = &mut w.scene.materials[0];
+            m.ka = Vec3::new(0.3, 0.1, 0.0);
+            m.kd = Vec3::new(0.7, 0.2, 0.5);
+            m.ks = Vec3::new(0.0, 0.25, 0.6);
+            m.kr = Vec3::new(0.4, 0.0, 0.1);
+            m.kt = Vec3::new(0.0, 0.9, 0.3) * (name == "refraction") as u32 as f32;
+            m.ke = Vec3::new(0.5, 0.0, 0.25);
         }
         let cam = w.scene.camera();
         let terms = Terms::of(None);
@@ -358,7 +371,7 @@ fn shade8_lanes_equal_the_scalar_shading_bit_for_bit() {
                         if let Some(r) = scalar[k] {
                             assert_eq!(bits3(Vec3::from(sec.origin.lane(i))), bits3(r.ray.origin));
                             assert_eq!(bits3(Vec3::from(sec.dir.lane(i))), bits3(r.ray.dir));
-                            assert_eq!(Vec3::splat(simd::lanes(sec.weight)[i]), r.weight);
+                            assert_eq!(bits3(Vec3::from(sec.weight.lane(i))), bits3(r.weight));
                             spawned[k][i] = Some(r.ray);
                         }
                     }

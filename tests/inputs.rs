@@ -91,6 +91,23 @@ fn fuzz_corpus_mfile() {
 }
 
 #[test]
+fn fuzz_corpus_ply() {
+    let mut n = 0;
+    for (p, data) in corpus("ply") {
+        n += 1;
+        fuzz::ply(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(n >= 3);
+}
+
+#[test]
+fn fuzz_corpus_obj_mtl() {
+    for (p, data) in corpus("obj_mtl") {
+        fuzz::obj_mtl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+}
+
+#[test]
 fn fuzz_corpus_obj() {
     for (p, data) in corpus("obj") {
         if let Err(e) = fuzz::obj(&data) {
@@ -695,7 +712,7 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
             COLOR_OD,
             "file = \"meshes/shape.stl\"",
             format!(
-                "{s}:22: mesh[1].file: {d}/meshes/shape.stl: unknown mesh format '.stl'; mesh files are .m, .obj"
+                "{s}:22: mesh[1].file: {d}/meshes/shape.stl: unknown mesh format '.stl'; mesh files are .m, .obj, .ply"
             ),
         ),
         (
@@ -846,12 +863,13 @@ fn caps_are_checked_before_generating_shapes() {
 /// `whitted info` on a file type it does not read says which types it does.
 #[test]
 fn info_on_an_unknown_file_type_lists_the_types() {
-    let dir = scene_dir("info", &[("x.ply", b"ply\nformat ascii 1.0\nend_header\n")]);
-    let e = whitted::info::run(&dir.join("x.ply"), false)
+    // (.ply was the unknown type here until issue 12 made PLY a mesh format.)
+    let dir = scene_dir("info", &[("x.stl", b"solid x\nendsolid x\n")]);
+    let e = whitted::info::run(&dir.join("x.stl"), false)
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("x.ply: not a file type whitted reads; it reads meshes (.m, .obj), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
+        e.contains("x.stl: not a file type whitted reads; it reads meshes (.m, .obj, .ply), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::io::image::{decode_cubemap_capped, decode_texture_capped};
 use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
-use crate::io::{mfile, obj};
+use crate::io::{mfile, obj, ply};
 use std::path::{Path, PathBuf};
 
 /// The `.m` reader on arbitrary bytes.
@@ -15,10 +15,39 @@ pub fn mfile(data: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// The OBJ loader (our validation, then tobj) on arbitrary bytes.
+/// The OBJ reader (geometry only) on arbitrary bytes.
 pub fn obj(data: &[u8]) -> Result<()> {
     let (mesh, _) = obj::parse_obj(data, Path::new("fuzz.obj"))?;
     check_mesh(&mesh);
+    Ok(())
+}
+
+/// The PLY reader (ASCII and binary) on arbitrary bytes.
+pub fn ply(data: &[u8]) -> Result<()> {
+    let (mesh, _) = ply::parse_ply(data, Path::new("fuzz.ply"))?;
+    check_mesh(&mesh);
+    Ok(())
+}
+
+/// The OBJ reader with materials: the OBJ is the bytes before the first `--mtl--` line, the
+/// MTL file every `mtllib` names is the bytes after it (never a file on disk).
+pub fn obj_mtl(data: &[u8]) -> Result<()> {
+    let sep = b"\n--mtl--\n";
+    let (obj_bytes, mtl_bytes) = match data.windows(sep.len()).position(|w| w == sep) {
+        Some(at) => (&data[..at], &data[at + sep.len()..]),
+        None => (data, &[][..]),
+    };
+    let (model, _) = obj::parse_obj_model(obj_bytes, Path::new("fuzz.obj"), &mut |_, _, _| {
+        crate::io::mtl::parse_mtl(mtl_bytes, Path::new("fuzz.mtl"))
+    })?;
+    check_mesh(&model.mesh);
+    if let Some(f) = &model.face_materials {
+        assert_eq!(f.len(), model.mesh.triangles.len());
+        assert!(
+            f.iter()
+                .all(|&m| m == obj::NO_MATERIAL || (m as usize) < model.materials.len())
+        );
+    }
     Ok(())
 }
 

@@ -1,11 +1,15 @@
-//! Reading and writing files: meshes (`.m`, `.obj`), scenes (TOML), images.
+//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`), scenes (TOML), images.
 
+pub mod aov;
 pub mod fuzz;
 pub mod image;
 pub mod merge;
+pub mod mesh_scene;
 pub mod mfile;
+pub mod mtl;
 pub mod obj;
 pub mod output;
+pub mod ply;
 pub mod rays;
 pub mod scene_file;
 
@@ -17,7 +21,7 @@ use std::path::Path;
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
 
 /// Mesh file extensions the loaders read, in lower case (a mesh's format is its extension).
-pub const MESH_EXTENSIONS: [&str; 2] = ["m", "obj"];
+pub const MESH_EXTENSIONS: [&str; 3] = ["m", "obj", "ply"];
 
 /// Check that `path` is a regular file under [`MAX_FILE_BYTES`], without reading it: folders,
 /// devices and FIFOs (`/dev/zero` would never end) are refused.
@@ -51,7 +55,23 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
-/// Load a mesh by extension (`.m` or `.obj`); warnings are returned beside it.
+/// Load a mesh with the materials its file brings (OBJ: `mtllib`), by extension.
+pub fn load_model(path: &Path) -> Result<(obj::Model, Vec<String>)> {
+    match extension(path).as_str() {
+        "obj" => obj::load_obj_model(path),
+        _ => load_mesh(path).map(|(mesh, w)| {
+            (
+                obj::Model {
+                    mesh,
+                    ..Default::default()
+                },
+                w,
+            )
+        }),
+    }
+}
+
+/// Load a mesh by extension (`.m`, `.obj` or `.ply`); warnings are returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
     load_mesh_detail(path).map(|(m, w, _)| (m, w))
 }
@@ -63,6 +83,7 @@ pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
     let parse = match extension(path).as_str() {
         "m" => mfile::parse_m_detail,
         "obj" => obj::parse_obj_detail,
+        "ply" => ply::parse_ply_detail,
         _ => return Err(unknown_mesh_type(path)),
     };
     parse(&read_regular(path)?, path)
@@ -76,6 +97,24 @@ pub fn load_scene_mesh(path: &Path) -> Result<(Mesh, Vec<String>, Vec<u32>)> {
         return Ok((r.mesh, r.warnings, r.missing_rgb));
     }
     load_mesh(path).map(|(m, w)| (m, w, Vec::new()))
+}
+
+/// [`load_model`] for a scene: also the vertices a `.m` file left without `rgb` where others
+/// have one (see [`load_scene_mesh`]).
+pub fn load_scene_model(path: &Path) -> Result<(obj::Model, Vec<String>, Vec<u32>)> {
+    match extension(path).as_str() {
+        "obj" => obj::load_obj_model(path).map(|(m, w)| (m, w, Vec::new())),
+        _ => load_scene_mesh(path).map(|(mesh, w, missing)| {
+            (
+                obj::Model {
+                    mesh,
+                    ..Default::default()
+                },
+                w,
+                missing,
+            )
+        }),
+    }
 }
 
 /// The error for a mesh whose extension no loader reads; it lists the ones they do.

@@ -1,16 +1,36 @@
-//! Wavefront OBJ through tobj, after our own validation of every line.
+//! Wavefront OBJ, read and checked line by line by our own reader, with its MTL materials.
 //!
-//! tobj panics (integer overflow) or silently accepts some bad input (index 0, relative
-//! indices that underflow, NaN positions, a `w` of 0), so each line is checked here first and
-//! tobj reads a canonical rewrite: finite numbers only, every face index absolute and in range.
-//! Accepted: relative indices, n-gons (fan-triangulated), `v x y z w`, `v x y z r g b`,
-//! comments with any bytes, `\` continuations, CRLF. `mtllib` is a warning: materials come
-//! from the scene, so `.mtl` files are never opened and a missing one cannot break loading.
+//! Every number must be finite, every face index (absolute or relative) must name an existing
+//! `v`/`vt`/`vn`, and errors name the file and line. Accepted: n-gons (fan-triangulated),
+//! `v x y z w`, `v x y z r g b` (vertex colours), comments with any bytes, `\` continuations,
+//! CRLF, `usemtl` per face group, several `mtllib` statements and file names with spaces.
+//! (The reader was tobj until materials and vertex colours were needed: tobj's single-index
+//! mode cannot map colours back when only some vertices have them, it panics on `Kd 0.5` in
+//! an MTL file, and it had to be fed a validated rewrite of the file anyway.)
 
 use crate::error::{Error, Result};
+use crate::io::mtl::{self, MtlInfo};
+use crate::io::scene_file::MaterialDesc;
 use crate::mesh::Mesh;
 use glam::{Vec2, Vec3};
-use std::path::Path;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// A mesh with the materials its file brings.
+#[derive(Clone, Debug, Default)]
+pub struct Model {
+    /// Its triangles.
+    pub mesh: Mesh,
+    /// Materials of the file (MTL), already mapped onto whitted's terms.
+    pub materials: Vec<MaterialDesc>,
+    /// What each MTL material said and which textures were found (for `whitted info`).
+    pub material_info: Vec<MtlInfo>,
+    /// Per triangle, an index into `materials`, or [`NO_MATERIAL`] (`None`: no face has one).
+    pub face_materials: Option<Vec<u32>>,
+}
+
+/// A triangle whose face group named no (known) material.
+pub const NO_MATERIAL: u32 = u32::MAX;
 
 /// Read and load an OBJ file ([`parse_obj`] on its bytes).
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
@@ -18,7 +38,7 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
     parse_obj(&bytes, path)
 }
 
-/// Validate and load OBJ text. All groups and objects are merged into one mesh.
+/// Validate and load OBJ text (materials are not read). All groups are merged into one mesh.
 pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
     parse_obj_detail(bytes, path).map(|(m, w, _)| (m, w))
 }
@@ -26,91 +46,152 @@ pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>)> {
 /// [`parse_obj`], also telling whether the file gave vertex normals (otherwise computed).
 pub fn parse_obj_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
     let mut warnings = Vec::new();
-    let text = canonicalise(bytes, path, &mut warnings)?;
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let mut reader = std::io::BufReader::new(text.as_bytes());
-    // Materials are not used by whitted (the scene file gives materials), so .mtl files are
-    // never opened: a missing .mtl cannot break loading.
-    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
-        .map_err(|e| Error::parse(path, 0, format!("OBJ: {e}")))?;
-
-    let mut mesh = Mesh::default();
-    let (mut any_normals, mut all_normals, mut all_uvs) = (false, true, true);
-    for m in &models {
-        let nv = m.mesh.positions.len() / 3;
-        any_normals |= m.mesh.normals.len() == nv * 3 && nv > 0;
-        all_normals &= m.mesh.normals.len() == nv * 3;
-        all_uvs &= m.mesh.texcoords.len() == nv * 2;
-    }
-    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
-    for m in &models {
-        let base = mesh.positions.len() as u32;
-        let p = &m.mesh.positions;
-        let nv = p.len() / 3;
-        mesh.positions
-            .extend((0..nv).map(|i| Vec3::new(p[3 * i], p[3 * i + 1], p[3 * i + 2])));
-        if all_normals {
-            let n = &m.mesh.normals;
-            normals.extend((0..nv).map(|i| Vec3::new(n[3 * i], n[3 * i + 1], n[3 * i + 2])));
-        }
-        if all_uvs {
-            let t = &m.mesh.texcoords;
-            uvs.extend((0..nv).map(|i| Vec2::new(t[2 * i], t[2 * i + 1])));
-        }
-        for tri in m.mesh.indices.chunks_exact(3) {
-            if tri.iter().any(|&i| i as usize >= nv) {
-                return Err(Error::parse(
-                    path,
-                    0,
-                    "OBJ: face index out of range after loading",
-                ));
-            }
-            mesh.triangles
-                .push([base + tri[0], base + tri[1], base + tri[2]]);
-        }
-    }
-    if any_normals && !all_normals {
-        warnings.push(format!(
-            "{}: only some faces have normals; computing all normals",
-            path.display()
-        ));
-    }
-    if mesh.triangles.is_empty() {
-        return Err(Error::parse(path, 0, "OBJ: no triangles"));
-    }
-    let file_normals = all_normals && !normals.is_empty();
-    if file_normals {
-        mesh.normals = Some(normals);
-    }
-    if all_uvs && !uvs.is_empty() {
-        mesh.uvs = Some(uvs);
-    }
-    mesh.ensure_normals();
-    let degenerate = mesh.degenerate_count();
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
-            path.display()
-        ));
-    }
+    let parsed = parse_lines(bytes, path, &mut warnings)?;
+    let (mesh, file_normals, _) = assemble(&parsed, path, &mut warnings)?;
     Ok((mesh, warnings, file_normals))
 }
 
-/// Line-by-line check of everything tobj trusts, producing the text tobj then reads.
-///
-/// The output holds only `v x y z` (w applied, colours dropped), `vt u v`, `vn x y z` and
-/// `f` lines with absolute 1-based indices, one per input line (blank lines elsewhere, so
-/// tobj never sees comments, continuations, non-UTF-8 bytes, `l`/`p` records or materials).
-/// Every number is finite; every index names an existing `v`/`vt`/`vn`.
-fn canonicalise(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<String> {
-    let (mut nv, mut nvt, mut nvn) = (0u64, 0u64, 0u64);
-    let mut faces = 0usize;
-    let mut out = String::with_capacity(bytes.len().min(1 << 30) + 16);
+/// Load an OBJ file with its `mtllib` materials (resolved beside the OBJ file). A missing
+/// `.mtl` or texture is a warning; a malformed `.mtl` is an error naming its file and line.
+pub fn load_obj_model(path: &Path) -> Result<(Model, Vec<String>)> {
+    let bytes = super::read_regular(path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_obj_model(&bytes, path, &mut |line, entry, warnings| {
+        // `mtllib a.mtl b.mtl` names two files, `mtllib my materials.mtl` one with a space:
+        // the whole entry when such a file exists, else each word.
+        let names: Vec<&str> = if find_beside(&dir, entry).is_some() {
+            vec![entry]
+        } else {
+            entry.split_whitespace().collect()
+        };
+        let mut out = Vec::new();
+        for name in names {
+            match find_beside(&dir, name) {
+                Some(file) => out.extend(mtl::parse_mtl(&super::read_regular(&file)?, &file)?),
+                None => warnings.push(format!(
+                    "{}:{line}: mtllib '{name}' not found in {}; its materials fall back to the default",
+                    path.display(),
+                    display_dir(&dir)
+                )),
+            }
+        }
+        Ok(out)
+    })
+}
+
+/// `dir/name` if it exists.
+pub(crate) fn find_beside(dir: &Path, name: &str) -> Option<PathBuf> {
+    let p = dir.join(name);
+    p.is_file().then_some(p)
+}
+
+pub(crate) fn display_dir(dir: &Path) -> String {
+    if dir.as_os_str().is_empty() {
+        ".".into()
+    } else {
+        dir.display().to_string()
+    }
+}
+
+/// Reads the materials of one `mtllib` statement: `(line, rest of the line, warnings)`.
+pub type MtlReader<'a> =
+    dyn FnMut(usize, &str, &mut Vec<String>) -> Result<Vec<mtl::MtlMaterial>> + 'a;
+
+/// [`load_obj_model`] on bytes, with `read_mtl` reading each `mtllib` entry.
+pub fn parse_obj_model(
+    bytes: &[u8],
+    path: &Path,
+    read_mtl: &mut MtlReader,
+) -> Result<(Model, Vec<String>)> {
+    let mut warnings = Vec::new();
+    let parsed = parse_lines(bytes, path, &mut warnings)?;
+    // Every mtllib entry, in order; the first definition of a name wins.
+    let mut mtls: Vec<mtl::MtlMaterial> = Vec::new();
+    for (line, entry) in &parsed.mtllibs {
+        for m in read_mtl(*line, entry, &mut warnings)? {
+            if mtls.iter().any(|x| x.name == m.name) {
+                warnings.push(format!(
+                    "{}:{line}: material '{}' is defined twice; the first definition is used",
+                    path.display(),
+                    m.name
+                ));
+            } else {
+                mtls.push(m);
+            }
+        }
+    }
+    let (mesh, _, face_groups) = assemble(&parsed, path, &mut warnings)?;
+    // Map the usemtl names of the face groups onto the MTL materials.
+    let mut group_material = Vec::with_capacity(parsed.usemtl.len());
+    for (line, name) in &parsed.usemtl {
+        let found = mtls.iter().position(|m| &m.name == name);
+        if found.is_none() {
+            warnings.push(format!(
+                "{}:{line}: usemtl '{name}': no such material in the mtllib files; the default material is used",
+                path.display()
+            ));
+        }
+        group_material.push(found.map_or(NO_MATERIAL, |i| i as u32));
+    }
+    let face_materials = (!parsed.usemtl.is_empty()).then(|| {
+        face_groups
+            .iter()
+            .map(|&g| {
+                if g == NO_MATERIAL {
+                    NO_MATERIAL
+                } else {
+                    group_material[g as usize]
+                }
+            })
+            .collect::<Vec<u32>>()
+    });
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let has_uv = mesh.uvs.is_some();
+    let has_colors = mesh.colors.is_some();
+    let mut materials = Vec::new();
+    let mut material_info = Vec::new();
+    for m in &mtls {
+        let (desc, info) = mtl::to_material(m, &dir, has_uv, has_colors, &mut warnings);
+        materials.push(desc);
+        material_info.push(info);
+    }
+    Ok((
+        Model {
+            mesh,
+            materials,
+            material_info,
+            face_materials,
+        },
+        warnings,
+    ))
+}
+
+/// What the line pass collects: attributes, faces as `(v, vt, vn)` corners (0-based,
+/// `u32::MAX` = absent) and the face group (`usemtl` index) of every face.
+#[derive(Default)]
+struct Parsed {
+    positions: Vec<Vec3>,
+    colors: Vec<Option<Vec3>>,
+    uvs: Vec<Vec2>,
+    normals: Vec<Vec3>,
+    /// Corners of all faces, one after the other; `faces[k]` = (first corner, count, group).
+    corners: Vec<[u32; 3]>,
+    faces: Vec<(u32, u32, u32)>,
+    /// `(line, rest of the line)` of each `mtllib`.
+    mtllibs: Vec<(usize, String)>,
+    /// `(line, name)` of each `usemtl` (a face group).
+    usemtl: Vec<(usize, String)>,
+}
+
+const ABSENT: u32 = u32::MAX;
+
+/// Most corners (face vertices) a file may have: far beyond the scene's triangle cap, checked
+/// as faces are read so that the corner list never grows without bound.
+const MAX_CORNERS: usize = 1 << 28;
+
+fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<Parsed> {
+    let mut p = Parsed::default();
+    let mut group = NO_MATERIAL;
     let mut logical = String::new();
     let mut first_line = 0;
     for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
@@ -140,8 +221,10 @@ fn canonicalise(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result
         logical.push_str(text);
         let line = std::mem::take(&mut logical);
         let err = |msg: String| Error::parse(path, first_line, msg);
-        let mut tok = line.split_whitespace();
-        let Some(kind) = tok.next() else { continue };
+        let line = line.trim();
+        let (kind, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        let rest = rest.trim();
+        let tok = rest.split_whitespace();
         let nums = |what: &str, tok: std::str::SplitWhitespace| -> Result<Vec<f32>> {
             tok.map(|t| {
                 let x: f32 = t
@@ -156,16 +239,18 @@ fn canonicalise(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result
             .collect()
         };
         match kind {
+            "" => {}
             "v" => {
                 let c = nums("v", tok)?;
-                let p = match c.len() {
-                    // x y z, x y z w (homogeneous), x y z r g b (colour, unused here)
-                    3 | 6 => [c[0], c[1], c[2]],
+                let (q, color) = match c.len() {
+                    3 => ([c[0], c[1], c[2]], None),
+                    // x y z r g b: a vertex colour
+                    6 => ([c[0], c[1], c[2]], Some(Vec3::new(c[3], c[4], c[5]))),
                     4 => {
                         if c[3] == 0.0 {
                             return Err(err("v: w must not be 0".into()));
                         }
-                        [c[0] / c[3], c[1] / c[3], c[2] / c[3]]
+                        ([c[0] / c[3], c[1] / c[3], c[2] / c[3]], None)
                     }
                     n => {
                         return Err(err(format!(
@@ -173,86 +258,183 @@ fn canonicalise(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result
                         )));
                     }
                 };
-                if !p.iter().all(|x| x.is_finite()) {
+                if !q.iter().all(|x| x.is_finite()) {
                     return Err(err("v: x/w overflows".into()));
                 }
-                out.push_str(&format!("v {:?} {:?} {:?}", p[0], p[1], p[2]));
-                nv += 1;
+                if let Some(c) = color
+                    && c.cmplt(Vec3::ZERO).any()
+                {
+                    return Err(err("v: colour components must be >= 0".into()));
+                }
+                p.positions.push(Vec3::from(q));
+                p.colors.push(color);
             }
             "vt" => {
                 let c = nums("vt", tok)?;
                 if !(1..=3).contains(&c.len()) {
-                    return Err(err(format!("vt: expected u [v [w]], found {} numbers", c.len())));
+                    return Err(err(format!(
+                        "vt: expected u [v [w]], found {} numbers",
+                        c.len()
+                    )));
                 }
-                out.push_str(&format!("vt {:?} {:?}", c[0], c.get(1).copied().unwrap_or(0.0)));
-                nvt += 1;
+                p.uvs
+                    .push(Vec2::new(c[0], c.get(1).copied().unwrap_or(0.0)));
             }
             "vn" => {
                 let c = nums("vn", tok)?;
                 if c.len() != 3 {
-                    return Err(err(format!("vn: expected x y z, found {} numbers", c.len())));
+                    return Err(err(format!(
+                        "vn: expected x y z, found {} numbers",
+                        c.len()
+                    )));
                 }
-                out.push_str(&format!("vn {:?} {:?} {:?}", c[0], c[1], c[2]));
-                nvn += 1;
+                p.normals.push(Vec3::new(c[0], c[1], c[2]));
             }
             "f" => {
-                let mut count = 0;
-                out.push('f');
+                let first = p.corners.len() as u32;
+                let counts = [p.positions.len(), p.uvs.len(), p.normals.len()];
                 for vert in tok {
-                    count += 1;
-                    out.push(' ');
+                    let mut corner = [ABSENT; 3];
                     let mut parts = vert.split('/');
-                    for (slot, (name, n)) in [("v", nv), ("vt", nvt), ("vn", nvn)]
-                        .into_iter()
-                        .enumerate()
-                    {
-                        let Some(p) = parts.next() else { break };
-                        if slot > 0 {
-                            out.push('/');
-                        }
-                        if p.is_empty() {
+                    for (slot, name) in ["v", "vt", "vn"].into_iter().enumerate() {
+                        let Some(s) = parts.next() else { break };
+                        if s.is_empty() {
                             if slot == 0 {
                                 return Err(err(format!("f: '{vert}' has no position index")));
                             }
                             continue;
                         }
-                        let i: i64 = p
+                        let n = counts[slot] as u64;
+                        let i: i64 = s
                             .parse()
-                            .map_err(|_| err(format!("f: '{vert}': '{p}' is not an index")))?;
+                            .map_err(|_| err(format!("f: '{vert}': '{s}' is not an index")))?;
                         // 1..=n counts from the start, -n..=-1 back from the latest entry.
                         let abs = match i {
-                            1.. if i.unsigned_abs() <= n => i.unsigned_abs(),
-                            ..=-1 if i.unsigned_abs() <= n => n - i.unsigned_abs() + 1,
+                            1.. if i.unsigned_abs() <= n => i.unsigned_abs() - 1,
+                            ..=-1 if i.unsigned_abs() <= n => n - i.unsigned_abs(),
                             _ => {
                                 return Err(err(format!(
                                     "f: '{vert}': {name} index {i} out of range (1..={n} or -{n}..=-1)"
                                 )));
                             }
                         };
-                        out.push_str(&abs.to_string());
+                        corner[slot] = abs as u32;
                     }
                     if parts.next().is_some() {
                         return Err(err(format!("f: '{vert}' has more than 3 '/' parts")));
                     }
+                    if p.corners.len() >= MAX_CORNERS {
+                        return Err(err(format!(
+                            "f: over {MAX_CORNERS} face vertices in the file (the cap)"
+                        )));
+                    }
+                    p.corners.push(corner);
                 }
+                let count = p.corners.len() as u32 - first;
                 if count < 3 {
                     return Err(err(format!("f: needs at least 3 vertices, has {count}")));
                 }
-                faces += 1;
+                p.faces.push((first, count, group));
             }
-            "mtllib" => warnings.push(format!(
-                "{}:{first_line}: materials from .mtl files are ignored (the scene gives materials)",
-                path.display()
-            )),
-            // o, g, s, usemtl, l, p and anything else: not needed (all groups are merged).
+            "mtllib" => {
+                if rest.is_empty() {
+                    return Err(err("mtllib: no file name".into()));
+                }
+                p.mtllibs.push((first_line, rest.to_string()));
+            }
+            "usemtl" => {
+                if rest.is_empty() {
+                    return Err(err("usemtl: no material name".into()));
+                }
+                group = p.usemtl.len() as u32;
+                p.usemtl.push((first_line, rest.to_string()));
+            }
+            // o, g, s, l, p and anything else: not needed (all groups are merged).
             _ => {}
         }
-        out.push('\n');
     }
-    if faces == 0 {
+    if p.faces.is_empty() {
         return Err(Error::parse(path, 0, "OBJ: no faces"));
     }
-    Ok(out)
+    let coloured = p.colors.iter().filter(|c| c.is_some()).count();
+    if coloured > 0 && coloured < p.colors.len() {
+        warnings.push(format!(
+            "{}: only {coloured} of {} vertices have a colour (v x y z r g b); colours are ignored",
+            path.display(),
+            p.colors.len()
+        ));
+    }
+    Ok(p)
+}
+
+/// One vertex per distinct `(v, vt, vn)` corner, faces fan-triangulated in file order.
+/// Returns the mesh, whether normals came from the file, and each triangle's face group.
+fn assemble(p: &Parsed, path: &Path, warnings: &mut Vec<String>) -> Result<(Mesh, bool, Vec<u32>)> {
+    let corners = &p.corners;
+    let all_uv = corners.iter().all(|c| c[1] != ABSENT);
+    let any_n = corners.iter().any(|c| c[2] != ABSENT);
+    let all_n = corners.iter().all(|c| c[2] != ABSENT);
+    let all_colors = p.colors.iter().all(Option::is_some);
+    if any_n && !all_n {
+        warnings.push(format!(
+            "{}: only some faces have normals; computing all normals",
+            path.display()
+        ));
+    }
+    let key = |c: &[u32; 3]| {
+        [
+            c[0],
+            if all_uv { c[1] } else { 0 },
+            if all_n { c[2] } else { 0 },
+        ]
+    };
+    let mut index: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut mesh = Mesh::default();
+    let (mut uvs, mut normals, mut colors) = (Vec::new(), Vec::new(), Vec::new());
+    let mut vertex = Vec::with_capacity(corners.len());
+    for c in corners {
+        let next = mesh.positions.len() as u32;
+        let v = *index.entry(key(c)).or_insert_with(|| {
+            mesh.positions.push(p.positions[c[0] as usize]);
+            if all_uv {
+                uvs.push(p.uvs[c[1] as usize]);
+            }
+            if all_n {
+                normals.push(p.normals[c[2] as usize]);
+            }
+            if all_colors {
+                colors.push(p.colors[c[0] as usize].unwrap_or(Vec3::ONE));
+            }
+            next
+        });
+        vertex.push(v);
+    }
+    let mut groups = Vec::new();
+    for &(first, count, group) in &p.faces {
+        let f = &vertex[first as usize..(first + count) as usize];
+        for k in 1..f.len() - 1 {
+            mesh.triangles.push([f[0], f[k], f[k + 1]]);
+            groups.push(group);
+        }
+    }
+    if all_uv {
+        mesh.uvs = Some(uvs);
+    }
+    if all_colors {
+        mesh.colors = Some(colors);
+    }
+    if all_n {
+        mesh.normals = Some(normals);
+    }
+    mesh.ensure_normals();
+    let degenerate = mesh.degenerate_count();
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
+            path.display()
+        ));
+    }
+    Ok((mesh, all_n, groups))
 }
 
 #[cfg(test)]

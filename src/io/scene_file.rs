@@ -5,7 +5,8 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{load_cubemap, load_texture};
-use crate::io::load_scene_mesh;
+use crate::io::load_scene_model;
+use crate::io::obj::{Model, NO_MATERIAL};
 use crate::mesh::Mesh;
 use crate::scene::{Albedo, Background, Light, Material, Object, Scene, View, shapes};
 use crate::texture::Texture;
@@ -206,6 +207,9 @@ fn default_depth() -> u32 {
 fn default_true() -> bool {
     true
 }
+fn is_true(v: &bool) -> bool {
+    *v
+}
 
 /// `[background]`: exactly one of `color` or `cubemap`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
@@ -258,24 +262,116 @@ pub struct MaterialDesc {
     /// `Od` from a procedural checker at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checker: Option<CheckerDesc>,
-    /// Ambient coefficient.
-    pub ka: f32,
-    /// Diffuse coefficient.
-    pub kd: f32,
-    /// Specular (and reflection) coefficient.
-    pub ks: f32,
+    /// Ambient coefficient: a number (the same in every channel) or `[r, g, b]`.
+    pub ka: Coef,
+    /// Diffuse coefficient (a number or `[r, g, b]`).
+    pub kd: Coef,
+    /// Specular (and, unless `kr` is given, reflection) coefficient (a number or `[r, g, b]`).
+    pub ks: Coef,
     /// Phong exponent.
     pub n: f32,
-    /// Transmission coefficient (default 0).
-    #[serde(default)]
-    pub kt: f32,
+    /// Transmission coefficient (default 0; a number or `[r, g, b]`).
+    #[serde(default, skip_serializing_if = "Coef::is_zero")]
+    pub kt: Coef,
     /// Index of refraction (default 1.5, > 0).
     #[serde(default = "default_ior")]
     pub ior: f32,
+    /// Weight of the reflection ray; omitted = `ks` (Whitted's one coefficient for both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kr: Option<Coef>,
+    /// Emitted colour: shown on the surface and, with `lamp` (default true), point lights.
+    #[serde(default, skip_serializing_if = "Coef::is_zero")]
+    pub ke: Coef,
+    /// Whether `ke` also lights the scene through point lights (default true).
+    #[serde(default = "default_true", skip_serializing_if = "is_true")]
+    pub lamp: bool,
 }
 
 fn default_ior() -> f32 {
     1.5
+}
+
+/// A material coefficient: one number for all three channels, or an RGB triple.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Coef {
+    /// The same value in every channel.
+    Scalar(f32),
+    /// One value per channel, `[r, g, b]`.
+    Rgb([f32; 3]),
+}
+
+impl Default for Coef {
+    fn default() -> Self {
+        Coef::Scalar(0.0)
+    }
+}
+
+impl From<f32> for Coef {
+    fn from(v: f32) -> Self {
+        Coef::Scalar(v)
+    }
+}
+
+impl Coef {
+    /// The value per channel.
+    pub fn rgb(self) -> [f32; 3] {
+        match self {
+            Coef::Scalar(v) => [v; 3],
+            Coef::Rgb(c) => c,
+        }
+    }
+
+    /// Whether every channel is 0.
+    pub fn is_zero(&self) -> bool {
+        self.rgb() == [0.0; 3]
+    }
+}
+
+impl Serialize for Coef {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Coef::Scalar(v) => s.serialize_f32(*v),
+            Coef::Rgb(c) => c.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Coef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Coef;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an array of 3 numbers [r, g, b]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Coef, E> {
+                Ok(Coef::Scalar(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Coef, E> {
+                Ok(Coef::Scalar(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Coef, E> {
+                Ok(Coef::Scalar(v as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<Coef, A::Error> {
+                let mut c = Vec::new();
+                while let Some(x) = seq.next_element::<f32>()? {
+                    if c.len() == 3 {
+                        return Err(serde::de::Error::invalid_length(4, &self));
+                    }
+                    c.push(x);
+                }
+                let n = c.len();
+                c.try_into()
+                    .map(Coef::Rgb)
+                    .map_err(|_| serde::de::Error::invalid_length(n, &self))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// A procedural checker texture: `squares x squares` cells alternating `a` and `b` (linear RGB).
@@ -299,7 +395,10 @@ pub struct MeshDesc {
     /// A name for messages and `whitted info` (default: the file name or `meshN`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    /// The material's name.
+    /// The scene material of the whole mesh. Omitted (files only): the file's own materials
+    /// (OBJ `mtllib`/`usemtl`), each replaced by a scene material of the same name if there
+    /// is one, and [`DEFAULT_MATERIAL`] for faces without one.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub material: String,
     /// A `.m` or `.obj` file ...
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -365,9 +464,10 @@ impl SceneFile {
         Ok(file)
     }
 
-    /// Read and parse a scene file; bytes that are not UTF-8 are refused with their line. A
-    /// mesh or an image given where a scene is expected is refused by its extension, with how
-    /// to make a scene for it.
+    /// Read and parse a scene file; bytes that are not UTF-8 are refused with their line. An
+    /// image given where a scene is expected is refused by its extension, with how to make a
+    /// scene for it (a mesh file is made a scene by
+    /// [`scene_for_mesh`](crate::io::mesh_scene::scene_for_mesh) instead).
     pub fn load(path: &Path) -> Result<SceneFile> {
         not_a_scene(path)?;
         let bytes = crate::io::read_regular(path)?;
@@ -384,22 +484,142 @@ impl SceneFile {
     }
 }
 
-/// Refuse a mesh or image given as a scene (TOML would call it `key with no value`).
+/// One `-D key=value` override: a TOML path (`camera.vfov`, `light[0].intensity`) and a TOML
+/// value (`30`, `[1, 1, 1]`, `true`, `"name"`; anything that does not parse as TOML is taken
+/// as a string, so `-D background.cubemap=textures/cubemap` needs no quotes).
+fn apply_override(root: &mut toml::Value, def: &str) -> std::result::Result<(), String> {
+    let (key, value) = def
+        .split_once('=')
+        .ok_or("expected key=value (e.g. camera.vfov=30)")?;
+    let key = key.trim();
+    let value = value.trim();
+    let value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.to_string()));
+    let mut segments = Vec::new();
+    for seg in key.split('.') {
+        let (name, index) = match seg.split_once('[') {
+            Some((name, rest)) => {
+                let i = rest
+                    .strip_suffix(']')
+                    .and_then(|i| i.parse::<usize>().ok())
+                    .ok_or_else(|| format!("'{seg}': expected name[index]"))?;
+                (name, Some(i))
+            }
+            None => (seg, None),
+        };
+        if name.is_empty() {
+            return Err(format!("'{key}': empty name in the key"));
+        }
+        segments.push((name, index));
+    }
+    let last = segments.len() - 1;
+    let mut node = root;
+    for (k, (name, index)) in segments.into_iter().enumerate() {
+        let toml::Value::Table(table) = node else {
+            return Err(format!("'{name}': its parent is not a table"));
+        };
+        if k == last && index.is_none() {
+            table.insert(name.to_string(), value);
+            return Ok(());
+        }
+        let entry = table.entry(name.to_string()).or_insert_with(|| {
+            if index.is_some() {
+                toml::Value::Array(Vec::new())
+            } else {
+                toml::Value::Table(toml::Table::new())
+            }
+        });
+        node = match index {
+            None => entry,
+            Some(i) => {
+                let toml::Value::Array(items) = entry else {
+                    return Err(format!("'{name}' is not an array"));
+                };
+                // One past the end appends a new entry (a new light, material or mesh).
+                if i == items.len() {
+                    items.push(toml::Value::Table(toml::Table::new()));
+                }
+                let n = items.len();
+                let item = items
+                    .get_mut(i)
+                    .ok_or_else(|| format!("'{name}' has {n} entries (index 0..={n})"))?;
+                if k == last {
+                    *item = value;
+                    return Ok(());
+                }
+                item
+            }
+        };
+    }
+    unreachable!("the last segment returns")
+}
+
+impl SceneFile {
+    /// Apply `-D key=value` overrides in order, each checked as the file is (unknown keys,
+    /// types); errors name the `-D` argument. Values are validated by [`build_scene`].
+    pub fn with_overrides(&self, defs: &[String]) -> Result<SceneFile> {
+        if defs.is_empty() {
+            return Ok(self.clone());
+        }
+        let mut root = toml::Value::try_from(self).expect("scene serialises");
+        for def in defs {
+            let fail = |m: String| Error::Usage(format!("-D '{def}': {m}"));
+            apply_override(&mut root, def).map_err(fail)?;
+            // Check each override at once, so the error names the one that broke the scene.
+            SceneFile::deserialize(root.clone()).map_err(|e| {
+                fail(
+                    e.message()
+                        .lines()
+                        .next()
+                        .unwrap_or("invalid")
+                        .trim()
+                        .to_string(),
+                )
+            })?;
+        }
+        let mut file = SceneFile::deserialize(root).expect("checked above");
+        // Errors about the files the scene names still point at the lines of its text.
+        file.lines = self.lines.clone();
+        Ok(file)
+    }
+}
+
+/// The `-D` arguments a validation message is about: the key, or its array entry and last
+/// name (messages write `material[0] 'glass'.kd` for `material[0].kd`).
+pub fn overrides_named<'a>(message: &str, defs: &'a [String]) -> Vec<&'a str> {
+    defs.iter()
+        .map(String::as_str)
+        .filter(|d| {
+            let key = d.split_once('=').map_or(*d, |(k, _)| k).trim();
+            if message.contains(key) {
+                return true;
+            }
+            match (key.split_once('.'), key.rsplit_once('.')) {
+                (Some((first, _)), Some((_, last))) => {
+                    message.contains(first) && message.contains(&format!(".{last}"))
+                }
+                _ => false,
+            }
+        })
+        .collect()
+}
+
+/// Refuse an image given as a scene (TOML would call it `key with no value`). Meshes are not
+/// refused here: the CLI renders a mesh file given as the scene directly (see
+/// [`crate::io::mesh_scene`]) before any scene file is loaded.
 fn not_a_scene(path: &Path) -> Result<()> {
     let ext = crate::io::extension(path);
-    let what = if crate::io::MESH_EXTENSIONS.contains(&ext.as_str()) {
-        "a mesh"
-    } else if crate::io::image::IMAGE_EXTENSIONS.contains(&ext.as_str()) {
-        "an image"
-    } else {
+    if !crate::io::image::IMAGE_EXTENSIONS.contains(&ext.as_str()) {
         return Ok(());
-    };
+    }
     Err(Error::Format {
         path: path.to_path_buf(),
         msg: format!(
-            "this is {what} (.{ext}), but a scene file (.toml) is expected; make one with \
-             `whitted scene phong > my.toml`, set its [[mesh]] file (or a material's texture) to \
-             \"{}\", then `whitted render my.toml`",
+            "this is an image (.{ext}), but a scene file (.toml) is expected; make one with \
+             `whitted scene phong > my.toml`, set a material's texture to \"{}\", then \
+             `whitted render my.toml`",
             path.display()
         ),
     })
@@ -650,83 +870,29 @@ pub fn build_scene(
         ));
     }
     for (i, m) in file.materials.iter().enumerate() {
-        let key = |k: &str| format!("material[{i}] '{}'.{k}", m.name);
         if materials.iter().any(|x: &Material| x.name == m.name) {
             return Err(Error::scene(
                 path,
                 format!("material '{}' is defined twice", m.name),
             ));
         }
-        // `color` beside `vertex_color` colours the vertices a mesh gives no rgb.
-        let sources = (m.color.is_some() && !m.vertex_color) as u32
-            + m.vertex_color as u32
-            + m.texture.is_some() as u32
-            + m.checker.is_some() as u32;
-        if sources != 1 {
-            return Err(Error::scene(
-                path,
-                format!(
-                    "{}: give exactly one of color, vertex_color (with an optional color for vertices without rgb), texture, checker",
-                    key("color")
-                ),
-            ));
-        }
-        let color = m
-            .color
-            .map(|c| nonneg3(c, &key("color"), path))
-            .transpose()?;
-        let albedo = if m.vertex_color {
-            Albedo::VertexColor
-        } else if let Some(col) = color {
-            Albedo::Color(col)
-        } else if let Some(t) = &m.texture {
-            let refer = |e| {
-                let toml_key = format!("material[{i}].texture");
-                referenced(file, path, &toml_key, Some(key("texture")), e)
-            };
-            let found = search.resolve(t).map_err(refer)?;
-            match textures.iter().find(|(p, _)| *p == found) {
-                Some((_, tex)) => Albedo::Texture(tex.clone()),
-                None => {
-                    let tex = Arc::new(load_texture(&found).map_err(refer)?);
-                    textures.push((found, tex.clone()));
-                    Albedo::Texture(tex)
-                }
-            }
-        } else {
-            let ch = m.checker.as_ref().expect("one source");
-            if !(1..=4096).contains(&ch.squares) {
-                return Err(Error::scene(
-                    path,
-                    format!("{}: squares must be in 1..=4096", key("checker")),
-                ));
-            }
-            let size = (ch.squares as usize * 16).min(4096);
-            Albedo::Texture(Arc::new(Texture::checker(
-                size,
-                ch.squares as usize,
-                nonneg3(ch.a, &key("checker.a"), path)?,
-                nonneg3(ch.b, &key("checker.b"), path)?,
-            )))
+        let prefix = format!("material[{i}] '{}'", m.name);
+        let refer = |e| {
+            let toml_key = format!("material[{i}].texture");
+            referenced(file, path, &toml_key, Some(format!("{prefix}.texture")), e)
         };
-        let ior = m.ior;
-        if !(ior.is_finite() && ior > 0.0) {
-            return Err(Error::scene(
-                path,
-                format!("{}: must be a finite number > 0, found {ior}", key("ior")),
-            ));
-        }
+        materials.push(build_material(
+            m,
+            &prefix,
+            path,
+            search,
+            &mut textures,
+            &refer,
+        )?);
         // The colour of vertices a mesh gives no rgb (white unless the material says).
-        vertex_fill.push(color.unwrap_or(Vec3::ONE));
-        materials.push(Material {
-            name: m.name.clone(),
-            albedo,
-            ka: nonneg(m.ka, &key("ka"), path)?,
-            kd: nonneg(m.kd, &key("kd"), path)?,
-            ks: nonneg(m.ks, &key("ks"), path)?,
-            n: nonneg(m.n, &key("n"), path)?,
-            kt: nonneg(m.kt, &key("kt"), path)?,
-            ior,
+        vertex_fill.push(match m.color {
+            Some(c) if m.vertex_color => Vec3::from(c),
+            _ => Vec3::ONE,
         });
     }
 
@@ -749,24 +915,55 @@ pub fn build_scene(
     let mut loaded: Vec<LoadedMesh> = Vec::new();
     for (i, d) in file.meshes.iter().enumerate() {
         let key = |k: &str| format!("mesh[{i}].{k}");
-        let material = materials
-            .iter()
-            .position(|m| m.name == d.material)
-            .ok_or_else(|| {
-                Error::scene(
-                    path,
-                    format!("{}: no material named '{}'", key("material"), d.material),
-                )
-            })?;
+        if d.material.is_empty() && d.file.is_none() {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: required for inline and shape meshes (only files bring materials)",
+                    key("material")
+                ),
+            ));
+        }
+        let named = if d.material.is_empty() {
+            None
+        } else {
+            Some(
+                materials
+                    .iter()
+                    .position(|m| m.name == d.material)
+                    .ok_or_else(|| {
+                        Error::scene(
+                            path,
+                            format!("{}: no material named '{}'", key("material"), d.material),
+                        )
+                    })?,
+            )
+        };
         // Checked with the entry's triangle count before its mesh is copied or generated.
         let caps = |n| check_caps(i, d, n, total_triangles, subdivided_total, path);
-        let (mut mesh, name, missing_rgb) =
+        let (model, name, missing_rgb) =
             mesh_of(d, i, file, path, search, &mut loaded, &mut warnings, caps)?;
+        let (material, face_materials) = match named {
+            Some(m) => (m, None),
+            None => file_materials(
+                &model,
+                &name,
+                i,
+                file,
+                path,
+                search,
+                &mut materials,
+                &mut textures,
+            )?,
+        };
+        let mut mesh = model.mesh;
         if let Albedo::VertexColor = materials[material].albedo
             && let Some(colors) = &mut mesh.colors
         {
+            // File materials (and the default) have no fill colour: white.
+            let fill = vertex_fill.get(material).copied().unwrap_or(Vec3::ONE);
             for &v in &missing_rgb {
-                colors[v as usize] = vertex_fill[material];
+                colors[v as usize] = fill;
             }
         }
         let mesh = if d.subdivide > 0 {
@@ -779,6 +976,13 @@ pub fn build_scene(
         if d.subdivide > 0 {
             subdivided_total += made;
         }
+        // Subdivision makes 4 children per face, in order.
+        let face_materials = face_materials.map(|f| {
+            let n = 1usize << (2 * d.subdivide);
+            f.iter()
+                .flat_map(|&m| std::iter::repeat_n(m, n))
+                .collect::<Vec<u32>>()
+        });
         if !mesh.positions.iter().all(|p| p.is_finite()) {
             return Err(Error::scene(
                 path,
@@ -792,35 +996,48 @@ pub fn build_scene(
                 ),
             ));
         }
-        match &materials[material].albedo {
-            Albedo::VertexColor if mesh.colors.is_none() => {
-                return Err(Error::scene(
-                    path,
-                    format!(
-                        "{}: material '{}' uses vertex colours but the mesh has no rgb",
-                        key("material"),
-                        d.material
-                    ),
-                ));
+        let mut used = vec![material as u32];
+        if let Some(f) = &face_materials {
+            used = f.clone();
+            used.sort_unstable();
+            used.dedup();
+        }
+        for &material in &used {
+            let material = &materials[material as usize];
+            match &material.albedo {
+                Albedo::VertexColor if mesh.colors.is_none() => {
+                    return Err(Error::scene(
+                        path,
+                        format!(
+                            "{}: material '{}' uses vertex colours but the mesh has no rgb",
+                            key("material"),
+                            material.name
+                        ),
+                    ));
+                }
+                Albedo::Texture(_) if mesh.uvs.is_none() => {
+                    return Err(Error::scene(
+                        path,
+                        format!(
+                            "{}: material '{}' is textured but the mesh has no uv",
+                            key("material"),
+                            material.name
+                        ),
+                    ));
+                }
+                _ => {}
             }
-            Albedo::Texture(_) if mesh.uvs.is_none() => {
-                return Err(Error::scene(
-                    path,
-                    format!(
-                        "{}: material '{}' is textured but the mesh has no uv",
-                        key("material"),
-                        d.material
-                    ),
-                ));
-            }
-            _ => {}
         }
         objects.push(Object {
             name,
             mesh,
             material,
+            face_materials,
         });
     }
+
+    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own.
+    lights.extend(crate::scene::emitter_lights(&objects, &materials));
 
     let scene = Scene {
         width,
@@ -840,6 +1057,116 @@ pub fn build_scene(
         depth: r.depth,
     };
     Ok((scene, warnings))
+}
+
+/// The material faces of a file get when they name none (or the file has no materials):
+/// grey, or the vertex colours when the file has them.
+pub const DEFAULT_MATERIAL: &str = "default";
+
+/// [`DEFAULT_MATERIAL`] as a scene material description.
+pub fn default_material(vertex_colors: bool) -> MaterialDesc {
+    MaterialDesc {
+        name: DEFAULT_MATERIAL.into(),
+        color: (!vertex_colors).then_some([0.8; 3]),
+        vertex_color: vertex_colors,
+        texture: None,
+        checker: None,
+        ka: Coef::Scalar(0.3),
+        kd: Coef::Scalar(0.7),
+        ks: Coef::Scalar(0.1),
+        n: 40.0,
+        kt: Coef::Scalar(0.0),
+        ior: 1.5,
+        kr: Some(Coef::Scalar(0.0)),
+        ke: Coef::Scalar(0.0),
+        lamp: true,
+    }
+}
+
+/// Validate one material description and load its texture (one load per file).
+fn build_material(
+    m: &MaterialDesc,
+    prefix: &str,
+    path: &Path,
+    search: &SearchPath,
+    textures: &mut Vec<(PathBuf, Arc<Texture>)>,
+    refer: &dyn Fn(Error) -> Error,
+) -> Result<Material> {
+    let key = |k: &str| format!("{prefix}.{k}");
+    // `color` beside `vertex_color` colours the vertices a mesh gives no rgb.
+    let sources = (m.color.is_some() && !m.vertex_color) as u32
+        + m.vertex_color as u32
+        + m.texture.is_some() as u32
+        + m.checker.is_some() as u32;
+    if sources != 1 {
+        return Err(Error::scene(
+            path,
+            format!(
+                "{}: give exactly one of color, vertex_color (with an optional color for vertices without rgb), texture, checker",
+                key("color")
+            ),
+        ));
+    }
+    let color = m
+        .color
+        .map(|c| nonneg3(c, &key("color"), path))
+        .transpose()?;
+    let albedo = if m.vertex_color {
+        Albedo::VertexColor
+    } else if let Some(col) = color {
+        Albedo::Color(col)
+    } else if let Some(t) = &m.texture {
+        let found = search.resolve(t).map_err(refer)?;
+        match textures.iter().find(|(p, _)| *p == found) {
+            Some((_, tex)) => Albedo::Texture(tex.clone()),
+            None => {
+                let tex = Arc::new(load_texture(&found).map_err(refer)?);
+                textures.push((found, tex.clone()));
+                Albedo::Texture(tex)
+            }
+        }
+    } else {
+        let ch = m.checker.as_ref().expect("one source");
+        if !(1..=4096).contains(&ch.squares) {
+            return Err(Error::scene(
+                path,
+                format!("{}: squares must be in 1..=4096", key("checker")),
+            ));
+        }
+        let size = (ch.squares as usize * 16).min(4096);
+        Albedo::Texture(Arc::new(Texture::checker(
+            size,
+            ch.squares as usize,
+            nonneg3(ch.a, &key("checker.a"), path)?,
+            nonneg3(ch.b, &key("checker.b"), path)?,
+        )))
+    };
+    let ior = m.ior;
+    if !(ior.is_finite() && ior > 0.0) {
+        return Err(Error::scene(
+            path,
+            format!("{}: must be a finite number > 0, found {ior}", key("ior")),
+        ));
+    }
+    let coef = |c: Coef, k: &str| match c {
+        Coef::Scalar(v) => nonneg(v, &key(k), path).map(Vec3::splat),
+        Coef::Rgb(v) => nonneg3(v, &key(k), path),
+    };
+    let ks = coef(m.ks, "ks")?;
+    let ke = coef(m.ke, "ke")?;
+    Ok(Material {
+        name: m.name.clone(),
+        albedo,
+        ka: coef(m.ka, "ka")?,
+        kd: coef(m.kd, "kd")?,
+        ks,
+        n: nonneg(m.n, &key("n"), path)?,
+        kt: coef(m.kt, "kt")?,
+        ior,
+        kr: m.kr.map_or(Ok(ks), |c| coef(c, "kr"))?,
+        ke,
+        lamp: m.lamp && ke.max_element() > 0.0,
+    })
 }
 
 /// An error about a file the scene names: the scene, the line of `toml_key` (when the scene
@@ -864,9 +1191,9 @@ fn referenced(
 /// [`shapes::sphere_triangle_count`] of this).
 pub const SPHERE_SEGMENTS: u32 = 48;
 
-/// A mesh file as read once for a scene: where it was found, the mesh, the vertices it gave
-/// no rgb.
-type LoadedMesh = (PathBuf, Mesh, Vec<u32>);
+/// A mesh file as read once for a scene: where it was found, the mesh with the materials it
+/// brings, the vertices it gave no rgb.
+type LoadedMesh = (PathBuf, Model, Vec<u32>);
 
 /// Triangles an inline or generated mesh entry will have before subdivision, known from its
 /// parameters; `None` for files (known once read) and for entries that are not valid (their
@@ -939,7 +1266,7 @@ fn mesh_of(
     loaded: &mut Vec<LoadedMesh>,
     warnings: &mut Vec<String>,
     caps: impl FnOnce(u64) -> Result<u64>,
-) -> Result<(Mesh, String, Vec<u32>)> {
+) -> Result<(Model, String, Vec<u32>)> {
     let key = |k: &str| format!("mesh[{i}].{k}");
     let sources = d.file.is_some() as u32 + d.vertices.is_some() as u32 + d.shape.is_some() as u32;
     if sources != 1 {
@@ -963,16 +1290,16 @@ fn mesh_of(
         let k = match loaded.iter().position(|(p, ..)| *p == found) {
             Some(k) => k,
             None => {
-                let (mesh, w, missing) = load_scene_mesh(&found).map_err(refer)?;
+                let (model, w, missing) = load_scene_model(&found).map_err(refer)?;
                 warnings.extend(w);
-                loaded.push((found, mesh, missing));
+                loaded.push((found, model, missing));
                 loaded.len() - 1
             }
         };
-        caps(loaded[k].1.triangles.len() as u64)?;
-        let (_, mesh, missing) = &loaded[k];
+        caps(loaded[k].1.mesh.triangles.len() as u64)?;
+        let (_, model, missing) = &loaded[k];
         let name = d.name.clone().unwrap_or_else(|| f.clone());
-        return Ok((mesh.clone(), name, missing.clone()));
+        return Ok((model.clone(), name, missing.clone()));
     }
     let name = d.name.clone().unwrap_or_else(|| format!("mesh{i}"));
     let center = finite3(d.center.unwrap_or([0.0; 3]), &key("center"), path)?;
@@ -1011,7 +1338,7 @@ fn mesh_of(
             ..Default::default()
         };
         mesh.ensure_normals();
-        return Ok((mesh, name, Vec::new()));
+        return Ok((plain(mesh), name, Vec::new()));
     }
     let shape = d.shape.as_deref().unwrap_or_default();
     let size = finite3(d.size.unwrap_or([1.0; 3]), &key("size"), path)?;
@@ -1040,7 +1367,71 @@ fn mesh_of(
     debug_assert_eq!(mesh.triangles.len() as u64, n, "planned_triangles is exact");
     // A zero size makes the shape's own normals 0/0: fall back to the geometric normals.
     mesh.ensure_normals();
-    Ok((mesh, name, Vec::new()))
+    Ok((plain(mesh), name, Vec::new()))
+}
+
+fn plain(mesh: Mesh) -> Model {
+    Model {
+        mesh,
+        ..Default::default()
+    }
+}
+
+/// Scene materials for a mesh file's own materials: a scene material of the same name if
+/// there is one, else the file's (validated and added to the scene); faces without one get
+/// [`DEFAULT_MATERIAL`] (or its vertex-colour twin when the mesh has colours). Returns the
+/// material of the whole mesh, or a material per triangle.
+#[allow(clippy::too_many_arguments)]
+fn file_materials(
+    model: &Model,
+    name: &str,
+    i: usize,
+    file: &SceneFile,
+    path: &Path,
+    search: &SearchPath,
+    materials: &mut Vec<Material>,
+    textures: &mut Vec<(PathBuf, Arc<Texture>)>,
+) -> Result<(usize, Option<Vec<u32>>)> {
+    let mut index_of = |desc: &MaterialDesc, materials: &mut Vec<Material>| -> Result<u32> {
+        if let Some(k) = materials.iter().position(|m| m.name == desc.name) {
+            return Ok(k as u32);
+        }
+        let prefix = format!("mesh '{name}' material '{}'", desc.name);
+        // A texture of the file's materials is named by the mesh entry's file.
+        let refer = |e| {
+            let toml_key = format!("mesh[{i}].file");
+            referenced(file, path, &toml_key, Some(format!("{prefix}.texture")), e)
+        };
+        materials.push(build_material(
+            desc, &prefix, path, search, textures, &refer,
+        )?);
+        Ok(materials.len() as u32 - 1)
+    };
+    let colors = model.mesh.colors.is_some();
+    let mut default = default_material(colors);
+    if colors {
+        default.name = format!("{DEFAULT_MATERIAL}_vertex_color");
+    }
+    let Some(faces) = &model.face_materials else {
+        return Ok((index_of(&default, materials)? as usize, None));
+    };
+    let mut map = Vec::with_capacity(model.materials.len());
+    for desc in &model.materials {
+        map.push(index_of(desc, materials)?);
+    }
+    let mut fallback = None;
+    let mut out = Vec::with_capacity(faces.len());
+    for &f in faces {
+        out.push(if f == NO_MATERIAL {
+            match fallback {
+                Some(k) => k,
+                None => *fallback.insert(index_of(&default, materials)?),
+            }
+        } else {
+            map[f as usize]
+        });
+    }
+    Ok((out.first().copied().unwrap_or(0) as usize, Some(out)))
 }
 
 #[cfg(test)]

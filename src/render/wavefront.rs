@@ -347,7 +347,14 @@ fn shade_hits(
                 *t += 1;
             }
             counts[kind] += b.count_ones() as u64;
-            next.push_lanes(b, &sec.origin, &sec.dir, pixel, &w.scale(sec.weight), depth);
+            next.push_lanes(
+                b,
+                &sec.origin,
+                &sec.dir,
+                pixel,
+                &w.mul_elem(sec.weight),
+                depth,
+            );
         }
     }
     None

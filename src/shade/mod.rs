@@ -1,6 +1,7 @@
 //! Whitted's equation at one hit (SCENES.md §3), the scalar reference `shade1`.
 //!
-//! `I = Ia ka Od + sum_i S_i Ip_i [kd Od max(<N,l_i>,0) + ks max(<v,r_i>,0)^n] + ks Ir + kt It`
+//! `I = ke + Ia ka Od + sum_i S_i Ip_i [kd Od max(<N,l_i>,0) + ks max(<v,r_i>,0)^n] + kr Ir + kt It`
+//! with RGB coefficients (`kr = ks` and `ke = 0` unless a material says otherwise).
 
 pub mod packet;
 
@@ -82,8 +83,7 @@ pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
 /// Index of the material of triangle `tri` (scene order).
 #[inline]
 pub fn triangle_material(world: &World, tri: u32) -> u32 {
-    let object = world.geometry.tri_object[tri as usize];
-    world.scene.objects[object as usize].material as u32
+    world.geometry.tri_material[tri as usize]
 }
 
 /// `Od` at barycentric weights `b0 b1 b2` of the triangle with vertices `v`: the material's
@@ -156,6 +156,10 @@ pub fn direct1(
     let sc = &world.scene;
     // ambient
     let mut color = sc.ambient * m.ka * s.od;
+    // emission (lamps): their own colour, lit or not
+    if m.emits() {
+        color += m.ke;
+    }
     let v = -d.normalize();
     for (i, light) in sc.lights.iter().enumerate() {
         let l = (light.position - s.q).normalize();
@@ -174,7 +178,7 @@ pub fn direct1(
         // specular: r = 2 <N, l> N - l
         if terms.specular {
             let r = 2.0 * ndotl * s.n - l;
-            c += Vec3::splat(m.ks * phong_pow(v.dot(r).max(0.0), m.n));
+            c += m.ks * phong_pow(v.dot(r).max(0.0), m.n);
         }
         color += light.intensity * c;
     }
@@ -191,7 +195,7 @@ pub fn secondaries1(world: &World, s: &Surface, d: Vec3, depth: u32) -> [Option<
     let d = d.normalize();
     let dr = reflect(d, s.n).normalize();
     // reflection: d_r = d - 2 <d, N> N
-    if m.ks > 0.0 {
+    if m.reflects() {
         out[0] = Some(Secondary {
             ray: Ray::new(
                 offset_origin(s.q, s.ng, dr, world.eps),
@@ -199,13 +203,13 @@ pub fn secondaries1(world: &World, s: &Surface, d: Vec3, depth: u32) -> [Option<
                 0.0,
                 f32::INFINITY,
             ),
-            weight: Vec3::splat(m.ks),
+            weight: m.kr,
             kind: SecondaryKind::Reflection,
         });
     }
     // refraction: eta = 1/ior entering through a front face, ior leaving through a back face;
     // total internal reflection traces It along d_r.
-    if m.kt > 0.0 {
+    if m.refracts() {
         let eta = if s.back { m.ior } else { 1.0 / m.ior };
         // "with N facing against d": an interpolated normal can still lean along d after the
         // back-face flip; turn it so cosi >= 0 (only for the refraction formula).
@@ -218,7 +222,7 @@ pub fn secondaries1(world: &World, s: &Surface, d: Vec3, depth: u32) -> [Option<
                 0.0,
                 f32::INFINITY,
             ),
-            weight: Vec3::splat(m.kt),
+            weight: m.kt,
             kind: SecondaryKind::Refraction,
         });
     }

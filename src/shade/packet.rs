@@ -38,14 +38,14 @@ pub struct SecondaryLanes {
     pub origin: Vec3x8,
     /// Ray directions.
     pub dir: Vec3x8,
-    /// `ks` or `kt`: the weight the ray's colour is added with.
-    pub weight: F32x8,
+    /// `ks` or `kt` (RGB): the weight the ray's colour is added with.
+    pub weight: Vec3x8,
 }
 
 /// What shading a hit packet produces (reused across packets to avoid allocating).
 #[derive(Clone, Debug, Default)]
 pub struct Shade8 {
-    /// `Ia ka Od` per lane.
+    /// `Ia ka Od` (+ `ke` on emitting lanes) per lane.
     pub ambient: Vec3x8,
     /// One entry per light.
     pub lights: Vec<LightLanes>,
@@ -62,8 +62,13 @@ struct Gathered {
     vn: [[[f32; LANES]; 3]; 3],
     ng: [[f32; LANES]; 3],
     od: [[f32; LANES]; 3],
-    /// `ka kd ks n kt ior` per lane.
-    k: [[f32; LANES]; 6],
+    /// RGB `ka kd ks kt ke kr` per lane: `kc[coefficient][channel][lane]`.
+    kc: [[[f32; LANES]; 3]; 6],
+    /// Phong exponent and index of refraction per lane.
+    n: [f32; LANES],
+    ior: [f32; LANES],
+    /// Lanes whose material emits.
+    emits: u32,
     material: [u32; LANES],
 }
 
@@ -88,9 +93,14 @@ fn gather(world: &World, hits: &HitPacket8, bits: u32, b: [[f32; LANES]; 3]) -> 
             out.ng[a][i] = ng[a];
             out.od[a][i] = od[a];
         }
-        for (k, value) in [m.ka, m.kd, m.ks, m.n, m.kt, m.ior].into_iter().enumerate() {
-            out.k[k][i] = value;
+        for (k, value) in [m.ka, m.kd, m.ks, m.kt, m.ke, m.kr].into_iter().enumerate() {
+            for a in 0..3 {
+                out.kc[k][a][i] = value[a];
+            }
         }
+        out.n[i] = m.n;
+        out.ior[i] = m.ior;
+        out.emits |= (m.emits() as u32) << i;
         out.material[i] = material;
     }
     out
@@ -134,11 +144,17 @@ pub fn shade8(
     ng = Vec3x8::select(back, -ng, ng);
     n = Vec3x8::select(back, -n, n);
     let od = vec3x8(&gl.od);
-    let [ka, kd, ks, n_exp, kt, ior] = gl.k.map(simd::from_lanes);
+    let [ka, kd, ks, kt, ke, kr] = gl.kc.map(|c| vec3x8(&c));
+    let (n_exp, ior) = (simd::from_lanes(gl.n), simd::from_lanes(gl.ior));
 
     // ambient: Ia ka Od
     let ia = Vec3x8::splat(sc.ambient.to_array());
-    out.ambient = Vec3x8::new(ia.x * ka * od.x, ia.y * ka * od.y, ia.z * ka * od.z);
+    out.ambient = Vec3x8::new(ia.x * ka.x * od.x, ia.y * ka.y * od.y, ia.z * ka.z * od.z);
+    // emission (lamps): + ke on the lanes whose material emits
+    if gl.emits & bits != 0 {
+        let m = simd::mask_from_bits(gl.emits);
+        out.ambient = Vec3x8::select(m, out.ambient + ke, out.ambient);
+    }
 
     // One Phong exponent for the whole packet (the usual case) is raised across lanes.
     let first = gl.material[bits.trailing_zeros() as usize % LANES];
@@ -158,7 +174,7 @@ pub fn shade8(
         // Both terms vanish where <N, l> <= 0, so no shadow ray is needed there.
         let lit = mask & simd::gt(ndotl, zero);
         // diffuse: kd Od <N, l>
-        let kdod = Vec3x8::new(kd * od.x, kd * od.y, kd * od.z);
+        let kdod = Vec3x8::new(kd.x * od.x, kd.y * od.y, kd.z * od.z);
         let mut c = kdod.scale(ndotl);
         // specular: r = 2 <N, l> N - l; ks max(<v, r>, 0)^n
         if terms.specular {
@@ -171,8 +187,7 @@ pub fn shade8(
                     simd::from_lanes(std::array::from_fn(|i| phong_pow(b[i], e[i])))
                 }
             };
-            let s = ks * pow;
-            c = c + Vec3x8::new(s, s, s);
+            c = c + ks.scale(pow);
         }
         let ip = Vec3x8::splat(light.intensity.to_array());
         // shadow ray: origin offset along +-Ng to the light's side, tfar to the light.
@@ -197,15 +212,16 @@ pub fn shade8(
         let side = simd::gt(dir.dot(ng), zero);
         Vec3x8::select(side, q + ng.scale(eps), q - ng.scale(eps))
     };
+    let any = |k: Vec3x8| simd::gt(simd::max(simd::max(k.x, k.y), k.z), zero);
     out.reflection = SecondaryLanes {
-        mask: alive & simd::gt(ks, zero),
+        mask: alive & any(kr),
         origin: offset(dr),
         dir: dr,
-        weight: ks,
+        weight: kr,
     };
     // refraction: eta = 1/ior entering through a front face, ior leaving through a back
     // face; N turned against d; total internal reflection (k < 0) takes d_r.
-    let refr = alive & simd::gt(kt, zero);
+    let refr = alive & any(kt);
     out.refraction = if simd::any(refr) {
         let eta = simd::select(back, ior, one / ior);
         let nt = Vec3x8::select(simd::gt(d.dot(n), zero), -n, n);

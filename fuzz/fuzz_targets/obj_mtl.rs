@@ -1,0 +1,9 @@
+//! Fuzz target: `whitted::io::fuzz::obj_mtl` (OBJ + MTL) must never panic, hang or allocate
+//! without bound.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = whitted::io::fuzz::obj_mtl(data);
+});
