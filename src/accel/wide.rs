@@ -89,6 +89,8 @@ pub struct Bvh8 {
     /// nodes that were opened into a wide node's children): where a hybrid packet hands its
     /// remaining lanes to single-ray traversal.
     pub entry: Vec<u32>,
+    /// Slots of the leaf being made (reused from leaf to leaf while collapsing).
+    scratch: Vec<u32>,
 }
 
 /// `Bvh8::entry` of a binary node without a wide twin.
@@ -132,21 +134,26 @@ impl Bvh8 {
         self.nodes.push(Node8::default());
         self.entry[b] = me as u32;
         // open the largest-area child until 8 children or only leaves remain.
-        let mut kids: Vec<usize> = Vec::with_capacity(BLOCK);
         let first = accel.nodes[b].first as usize;
-        kids.extend([first, first + 1]);
-        while kids.len() < BLOCK {
-            let open = kids
+        let mut kids = [0usize; BLOCK];
+        (kids[0], kids[1]) = (first, first + 1);
+        let mut len = 2;
+        while len < BLOCK {
+            let open = kids[..len]
                 .iter()
                 .enumerate()
                 .filter(|&(_, &k)| !is_leaf(accel, counts, k))
                 .max_by(|a, b| area(&accel.nodes[*a.1]).total_cmp(&area(&accel.nodes[*b.1])))
                 .map(|(i, _)| i);
             let Some(i) = open else { break };
-            let k = kids.swap_remove(i);
+            // as Vec::swap_remove then push both children
+            let k = kids[i];
+            kids[i] = kids[len - 1];
             let f = accel.nodes[k].first as usize;
-            kids.extend([f, f + 1]);
+            (kids[len - 1], kids[len]) = (f, f + 1);
+            len += 1;
         }
+        let kids = &kids[..len];
         let mut deepest = depth;
         for (slot, &k) in kids.iter().enumerate() {
             let r = if is_leaf(accel, counts, k) {
@@ -158,18 +165,21 @@ impl Bvh8 {
             };
             self.nodes[me].set_child(slot, &accel.nodes[k], r);
         }
-        self.nodes[me].set_order(kids.len());
+        self.nodes[me].set_order(len);
         deepest
     }
 
     /// Blocks for all triangles below binary node `b`; returns the leaf reference.
     fn leaf(&mut self, accel: &Accel, counts: &[u32], b: usize) -> u32 {
-        let mut slots = Vec::with_capacity(counts[b] as usize);
+        let mut slots = std::mem::take(&mut self.scratch);
+        slots.clear();
+        slots.reserve(counts[b] as usize);
         collect_slots(&accel.nodes, b, &mut slots);
         let first = self.blocks.len();
         for chunk in slots.chunks(BLOCK) {
             self.blocks.push(TriBlock8::new(accel, chunk));
         }
+        self.scratch = slots;
         let n = self.blocks.len() - first;
         let r = LEAF_BIT | ((n as u32).saturating_sub(1) << LEAF_BLOCKS_SHIFT) | first as u32;
         self.entry[b] = r;
@@ -201,9 +211,8 @@ impl Node8 {
             // octant bit k set: the direction's component k is negative.
             let sign = |k: usize| if oct >> k & 1 == 1 { -1.0 } else { 1.0 };
             let key = |i: usize| (0..3).map(|k| (lo[k][i] + hi[k][i]) * sign(k)).sum::<f32>();
-            let mut slots: Vec<usize> = (0..n).collect();
-            slots.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
-            slots.extend(n..BLOCK);
+            let mut slots: [usize; BLOCK] = std::array::from_fn(|i| i);
+            slots[..n].sort_by(|&a, &b| key(a).total_cmp(&key(b)));
             self.order[oct] = slots
                 .iter()
                 .enumerate()
@@ -223,19 +232,36 @@ impl TriBlock8 {
     /// The triangles at SoA slots `slots` (at most 8) in lanes `0 .. slots.len()`.
     fn new(accel: &Accel, slots: &[u32]) -> TriBlock8 {
         let t = &accel.tris;
-        let get = |f: &dyn Fn(usize) -> [f32; 3]| {
-            Vec3x8::from_fn(|j| slots.get(j).map_or([0.0; 3], |&s| f(s as usize)))
+        let mut f = [[[0f32; BLOCK]; 3]; 4]; // n, v0, p1, p2: [axis][lane]
+        let mut n_len = [0f32; BLOCK];
+        let mut prim = [u32::MAX; BLOCK];
+        let mut slot = [0u32; BLOCK];
+        for (j, &sl) in slots.iter().enumerate() {
+            let i = sl as usize;
+            for (field, src) in f.iter_mut().zip([&t.n, &t.v0, &t.p1, &t.p2]) {
+                for (axis, column) in field.iter_mut().zip(src) {
+                    axis[j] = column[i];
+                }
+            }
+            n_len[j] = t.n_len[i];
+            prim[j] = t.prim[i];
+            slot[j] = sl;
+        }
+        let v = |a: &[[f32; BLOCK]; 3]| {
+            Vec3x8::new(
+                simd::from_lanes(a[0]),
+                simd::from_lanes(a[1]),
+                simd::from_lanes(a[2]),
+            )
         };
         TriBlock8 {
-            n: get(&|s| t.n(s)),
-            v0: get(&|s| t.v0(s)),
-            p1: get(&|s| t.p1(s)),
-            p2: get(&|s| t.p2(s)),
-            n_len: simd::from_lanes(std::array::from_fn(|j| {
-                slots.get(j).map_or(0.0, |&s| t.n_len[s as usize])
-            })),
-            prim: std::array::from_fn(|j| slots.get(j).map_or(u32::MAX, |&s| t.prim[s as usize])),
-            slot: std::array::from_fn(|j| slots.get(j).copied().unwrap_or(0)),
+            n: v(&f[0]),
+            v0: v(&f[1]),
+            p1: v(&f[2]),
+            p2: v(&f[3]),
+            n_len: simd::from_lanes(n_len),
+            prim,
+            slot,
         }
     }
 }
