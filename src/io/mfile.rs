@@ -202,14 +202,7 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
         uvs,
         colors,
     };
-    mesh.ensure_normals();
-    let degenerate = mesh.degenerate_count();
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
-            path.display()
-        ));
-    }
+    super::finish_mesh(&mut mesh, path, &mut warnings);
     Ok(MRead {
         mesh,
         warnings,

@@ -142,6 +142,50 @@ pub fn list_extensions(exts: &[&str]) -> String {
         .join(", ")
 }
 
+/// One line of an OBJ-family text file (OBJ, MTL) as the parsers read it: without its `\r`
+/// and its comment (from `#` to the end, which may hold any bytes), trimmed; a NUL byte or
+/// invalid UTF-8 outside the comment is an error naming the file and line (`what` names
+/// the format in it).
+pub(crate) fn text_line<'a>(
+    raw: &'a [u8],
+    path: &Path,
+    line: usize,
+    what: &str,
+) -> Result<&'a str> {
+    let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+    let raw = match raw.iter().position(|&b| b == b'#') {
+        Some(h) => &raw[..h],
+        None => raw,
+    };
+    if raw.contains(&0) {
+        return Err(Error::parse(
+            path,
+            line,
+            format!("binary data (NUL byte); not {what} text file"),
+        ));
+    }
+    std::str::from_utf8(raw).map(str::trim).map_err(|_| {
+        Error::parse(
+            path,
+            line,
+            format!("invalid UTF-8 outside a comment; not {what} text file"),
+        )
+    })
+}
+
+/// What every mesh loader does last: vertex normals where the file gave none (area-weighted)
+/// and one warning counting the zero-area faces.
+pub(crate) fn finish_mesh(mesh: &mut Mesh, path: &Path, warnings: &mut Vec<String>) {
+    mesh.ensure_normals();
+    let degenerate = mesh.degenerate_count();
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
+            path.display()
+        ));
+    }
+}
+
 /// A file's extension in lower case (`""` when it has none): how every loader picks a format.
 pub fn extension(path: &Path) -> String {
     path.extension()

@@ -12,11 +12,12 @@ use serde::Serialize;
 use std::path::Path;
 
 /// One `newmtl` block as written (absent statements are `None`).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct MtlMaterial {
     /// Its `newmtl` name.
     pub name: String,
     /// File and line of its `newmtl`, for messages.
+    #[serde(skip)]
     pub origin: String,
     /// `Ka`, ambient colour.
     pub ka: Option<[f32; 3]>,
@@ -40,31 +41,13 @@ pub struct MtlMaterial {
     pub map_kd: Option<String>,
 }
 
-/// What `whitted info` reports about one material.
+/// What `whitted info` reports about one material: the statements as written, and whether
+/// its `map_Kd` file was found (and used).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct MtlInfo {
-    /// Its `newmtl` name.
-    pub name: String,
-    /// `illum`, the illumination model.
-    pub illum: Option<u8>,
-    /// `Ka`, ambient colour.
-    pub ka: Option<[f32; 3]>,
-    /// `Kd`, diffuse colour.
-    pub kd: Option<[f32; 3]>,
-    /// `Ks`, specular colour.
-    pub ks: Option<[f32; 3]>,
-    /// `Ke`, emitted colour.
-    pub ke: Option<[f32; 3]>,
-    /// `Tf`, transmission filter.
-    pub tf: Option<[f32; 3]>,
-    /// `Ns`, specular exponent.
-    pub ns: Option<f32>,
-    /// `Ni`, index of refraction.
-    pub ni: Option<f32>,
-    /// Dissolve (`d`, 1 = opaque), or `1 - Tr`.
-    pub d: Option<f32>,
-    /// `map_Kd` as written and whether it was found (and used).
-    pub map_kd: Option<String>,
+    /// The material as written.
+    #[serde(flatten)]
+    pub material: MtlMaterial,
     /// Whether the `map_Kd` file was found (and used).
     pub map_kd_found: Option<bool>,
 }
@@ -115,14 +98,7 @@ pub fn parse_mtl(bytes: &[u8], path: &Path) -> Result<Vec<MtlMaterial>> {
     for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = index + 1;
         let err = |msg: String| Error::parse(path, line_no, msg);
-        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let raw = match raw.iter().position(|&b| b == b'#') {
-            Some(h) => &raw[..h],
-            None => raw,
-        };
-        let text = std::str::from_utf8(raw)
-            .map_err(|_| err("invalid UTF-8 outside a comment; not an MTL text file".into()))?
-            .trim();
+        let text = super::text_line(raw, path, line_no, "an MTL")?;
         if text.is_empty() {
             continue;
         }
@@ -344,17 +320,7 @@ pub fn to_material(
         lamp: illum != 0,
     };
     let info = MtlInfo {
-        name: m.name.clone(),
-        illum: m.illum,
-        ka: m.ka,
-        kd: m.kd,
-        ks: m.ks,
-        ke: m.ke,
-        tf: m.tf,
-        ns: m.ns,
-        ni: m.ni,
-        d: m.d,
-        map_kd: m.map_kd.clone(),
+        material: m.clone(),
         map_kd_found: found,
     };
     (desc, info)

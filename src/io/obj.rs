@@ -196,19 +196,7 @@ fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<
     let mut first_line = 0;
     for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = index + 1;
-        let err = |msg: String| Error::parse(path, line_no, msg);
-        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        // A comment runs from '#' to the end of the line and may hold any bytes.
-        let raw = match raw.iter().position(|&b| b == b'#') {
-            Some(h) => &raw[..h],
-            None => raw,
-        };
-        if raw.contains(&0) {
-            return Err(err("binary data (NUL byte); not an OBJ text file".into()));
-        }
-        let text = std::str::from_utf8(raw)
-            .map_err(|_| err("invalid UTF-8 outside a comment; not an OBJ text file".into()))?
-            .trim();
+        let text = super::text_line(raw, path, line_no, "an OBJ")?;
         if logical.is_empty() {
             first_line = line_no;
         }
@@ -426,14 +414,7 @@ fn assemble(p: &Parsed, path: &Path, warnings: &mut Vec<String>) -> Result<(Mesh
     if all_n {
         mesh.normals = Some(normals);
     }
-    mesh.ensure_normals();
-    let degenerate = mesh.degenerate_count();
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
-            path.display()
-        ));
-    }
+    super::finish_mesh(&mut mesh, path, warnings);
     Ok((mesh, all_n, groups))
 }
 

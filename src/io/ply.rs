@@ -570,14 +570,7 @@ pub fn parse_ply_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>,
     if color.is_some() {
         mesh.colors = Some(colors);
     }
-    mesh.ensure_normals();
-    let degenerate = mesh.degenerate_count();
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
-            path.display()
-        ));
-    }
+    super::finish_mesh(&mut mesh, path, &mut warnings);
     Ok((mesh, warnings, file_normals))
 }
 
