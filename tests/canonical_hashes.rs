@@ -24,14 +24,7 @@ fn hash(pixels: &[glam::Vec3]) -> u64 {
 
 fn cases() -> Vec<(&'static str, Option<Stage>, Engine, u32)> {
     let mut v = Vec::new();
-    for name in [
-        "phong",
-        "vertex_color",
-        "texture",
-        "cubemap",
-        "refraction",
-        "demo",
-    ] {
+    for name in whitted::scenes::NAMES {
         for engine in [Engine::Packet, Engine::Scalar] {
             v.push((name, None, engine, 2));
         }

@@ -239,14 +239,7 @@ fn depth_zero_means_no_secondary_rays() {
 #[test]
 fn packet_and_scalar_engines_agree_on_every_scene_and_stage() {
     use whitted::render::Engine;
-    for name in [
-        "phong",
-        "vertex_color",
-        "texture",
-        "cubemap",
-        "refraction",
-        "demo",
-    ] {
+    for name in whitted::scenes::NAMES {
         let w = world(name, 40, 30);
         for stage in [None].into_iter().chain(Stage::ALL.map(Some)) {
             for spp in [1, 4] {
