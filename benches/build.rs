@@ -47,7 +47,7 @@ fn bench(c: &mut Criterion) {
         assert!(a.depth > 8 && a.depth < 64, "{name}: depth {}", a.depth);
         let leaf_tris: usize = a
             .wide
-            .blocks
+            .ids
             .iter()
             .map(|b| b.prim.iter().filter(|&&p| p != u32::MAX).count())
             .sum();

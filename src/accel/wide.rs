@@ -54,9 +54,12 @@ pub struct Node8 {
     pub order: [u32; BLOCK],
 }
 
-/// Up to 8 triangles in lanes, as `hit_triangle1` reads them (`TriangleSoa`'s fields). Unused
-/// lanes have `n = 0` (and `v0 = p1 = p2 = 0`): their plane test is `0 / 0 = NaN`, which fails
-/// the depth test, so they never hit (culled too: `<d, 0> >= 0`).
+/// Up to 8 triangles in lanes, as `hit_triangle1` reads them (`TriangleSoa`'s fields), and
+/// nothing else: 384 bytes, six cache lines. What a test needs only for a hit or a near-edge
+/// lane sits apart in [`BlockIds`], and `|n|` is recomputed from `n` when a lane passes the
+/// depth test (`TriangleSoa::n_len` is `n.length()`, the same float). Unused lanes have
+/// `n = 0` (and `v0 = p1 = p2 = 0`): their plane test is `0 / 0 = NaN`, which fails the
+/// depth test, so they never hit (culled too: `<d, 0> >= 0`).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub struct TriBlock8 {
@@ -68,8 +71,13 @@ pub struct TriBlock8 {
     pub p1: Vec3x8,
     /// Barycentric form of `v2`'s weight per lane (`TriangleSoa::p2`).
     pub p2: Vec3x8,
-    /// `|n|` per lane, for the grazing margin.
-    pub n_len: F32x8,
+}
+
+/// The cold half of a [`TriBlock8`] (same index in [`Bvh8::ids`]): read only to report a hit
+/// or to settle a near-edge lane in f64.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct BlockIds {
     /// Original triangle index per lane (`u32::MAX` in unused lanes).
     pub prim: [u32; BLOCK],
     /// SoA slot in `Accel::tris` per lane (for the f64 edge test).
@@ -83,6 +91,8 @@ pub struct Bvh8 {
     pub nodes: Vec<Node8>,
     /// Triangle blocks; a leaf is a run of consecutive blocks.
     pub blocks: Vec<TriBlock8>,
+    /// Triangle indices of each block (`ids[i]` belongs to `blocks[i]`).
+    pub ids: Vec<BlockIds>,
     /// Deepest root-to-leaf path in nodes (sizes traversal stacks).
     pub depth: usize,
     /// Per binary node, the wide reference of the same subtree ([`NO_ENTRY`] for binary
@@ -107,6 +117,7 @@ impl Bvh8 {
         out.entry = vec![NO_ENTRY; accel.nodes.len()];
         out.nodes.reserve(accel.nodes.len() / 4 + 1);
         out.blocks.reserve(accel.tris.len() / 4 + 1);
+        out.ids.reserve(accel.tris.len() / 4 + 1);
         let root = &accel.nodes[0];
         if counts[0] as usize <= BLOCK || root.count > 0 {
             // The whole scene is one leaf: a root node with a single child.
@@ -124,7 +135,8 @@ impl Bvh8 {
 
     /// Bytes of the tree and its blocks (the triangles' hot layout).
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Node8>() + self.blocks.len() * size_of::<TriBlock8>()
+        self.nodes.len() * size_of::<Node8>()
+            + self.blocks.len() * (size_of::<TriBlock8>() + size_of::<BlockIds>())
     }
 
     /// Make the wide node for binary node `b` (not a leaf) and its subtree; returns the depth
@@ -177,7 +189,7 @@ impl Bvh8 {
         collect_slots(&accel.nodes, b, &mut slots);
         let first = self.blocks.len();
         for chunk in slots.chunks(BLOCK) {
-            self.blocks.push(TriBlock8::new(accel, chunk));
+            self.push_block(accel, chunk);
         }
         self.scratch = slots;
         let n = self.blocks.len() - first;
@@ -207,12 +219,23 @@ impl Node8 {
     /// The per-octant visiting orders of the first `n` slots, and the in-use bits.
     fn set_order(&mut self, n: usize) {
         let (lo, hi) = (self.min.map(simd::lanes), self.max.map(simd::lanes));
+        let centre: [[f32; 3]; BLOCK] =
+            std::array::from_fn(|i| std::array::from_fn(|k| lo[k][i] + hi[k][i]));
         for oct in 0..8 {
-            // octant bit k set: the direction's component k is negative.
+            // octant bit k set: the direction's component k is negative; the key is the
+            // centre's distance along the octant's diagonal (summed in axis order).
             let sign = |k: usize| if oct >> k & 1 == 1 { -1.0 } else { 1.0 };
-            let key = |i: usize| (0..3).map(|k| (lo[k][i] + hi[k][i]) * sign(k)).sum::<f32>();
+            let key: [f32; BLOCK] =
+                std::array::from_fn(|i| (0..3).map(|k| centre[i][k] * sign(k)).sum::<f32>());
+            // insertion sort of the first n slots by key (stable: ties keep slot order).
             let mut slots: [usize; BLOCK] = std::array::from_fn(|i| i);
-            slots[..n].sort_by(|&a, &b| key(a).total_cmp(&key(b)));
+            for a in 1..n {
+                let mut b = a;
+                while b > 0 && key[slots[b - 1]].total_cmp(&key[slots[b]]).is_gt() {
+                    slots.swap(b - 1, b);
+                    b -= 1;
+                }
+            }
             self.order[oct] = slots
                 .iter()
                 .enumerate()
@@ -228,14 +251,16 @@ impl Node8 {
     }
 }
 
-impl TriBlock8 {
-    /// The triangles at SoA slots `slots` (at most 8) in lanes `0 .. slots.len()`.
-    fn new(accel: &Accel, slots: &[u32]) -> TriBlock8 {
+impl Bvh8 {
+    /// Append the block of the triangles at SoA slots `slots` (at most 8), in lanes
+    /// `0 .. slots.len()`.
+    fn push_block(&mut self, accel: &Accel, slots: &[u32]) {
         let t = &accel.tris;
         let mut f = [[[0f32; BLOCK]; 3]; 4]; // n, v0, p1, p2: [axis][lane]
-        let mut n_len = [0f32; BLOCK];
-        let mut prim = [u32::MAX; BLOCK];
-        let mut slot = [0u32; BLOCK];
+        let mut ids = BlockIds {
+            prim: [u32::MAX; BLOCK],
+            slot: [0; BLOCK],
+        };
         for (j, &sl) in slots.iter().enumerate() {
             let i = sl as usize;
             for (field, src) in f.iter_mut().zip([&t.n, &t.v0, &t.p1, &t.p2]) {
@@ -243,9 +268,8 @@ impl TriBlock8 {
                     axis[j] = column[i];
                 }
             }
-            n_len[j] = t.n_len[i];
-            prim[j] = t.prim[i];
-            slot[j] = sl;
+            ids.prim[j] = t.prim[i];
+            ids.slot[j] = sl;
         }
         let v = |a: &[[f32; BLOCK]; 3]| {
             Vec3x8::new(
@@ -254,20 +278,20 @@ impl TriBlock8 {
                 simd::from_lanes(a[2]),
             )
         };
-        TriBlock8 {
+        self.blocks.push(TriBlock8 {
             n: v(&f[0]),
             v0: v(&f[1]),
             p1: v(&f[2]),
             p2: v(&f[3]),
-            n_len: simd::from_lanes(n_len),
-            prim,
-            slot,
-        }
+        });
+        self.ids.push(ids);
     }
 }
 
 fn is_leaf(accel: &Accel, counts: &[u32], b: usize) -> bool {
-    accel.nodes[b].count > 0 || counts[b] as usize <= BLOCK
+    static L: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    let l = *L.get_or_init(|| std::env::var("LEAF").map_or(BLOCK, |v| v.parse().unwrap()));
+    accel.nodes[b].count > 0 || counts[b] as usize <= l
 }
 
 /// Half the surface area of a node's box (the SAH weight; the factor 2 does not matter).
@@ -339,7 +363,7 @@ pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
                 let slots: Vec<u32> = (start..start + count)
                     .map(|j| slot_of[cw.primitive_indices[j as usize] as usize])
                     .collect();
-                out.blocks.push(TriBlock8::new(accel, &slots));
+                out.push_block(accel, &slots);
                 LEAF_BIT | (out.blocks.len() - 1) as u32
             } else {
                 n.child_node_index(c)

@@ -62,7 +62,8 @@ impl RayWide {
 /// hit with `tnear < t < tfar` (smallest `t`, then smallest triangle index) as
 /// `(triangle, t, b1, b2)`. Steps as in `hit_triangle1`, per lane:
 #[inline(always)]
-pub fn hit_block1(accel: &Accel, b: &TriBlock8, r: &RayWide, tfar: f32, cull: bool) -> Option<Hit> {
+pub fn hit_block1(accel: &Accel, block: usize, r: &RayWide, tfar: f32, cull: bool) -> Option<Hit> {
+    let b: &TriBlock8 = &accel.wide.blocks[block];
     // plane hit: t = <v0 - p, n> / <d, n> (in-plane rays, zero-area triangles and unused
     // lanes give inf or NaN and fail the depth test).
     let dn = r.d.dot(b.n);
@@ -85,16 +86,22 @@ pub fn hit_block1(accel: &Accel, b: &TriBlock8, r: &RayWide, tfar: f32, cull: bo
     let b0 = simd::splat(1.0) - b1 - b2;
     // inside when no coordinate is negative; lanes within BARY_SAFE of an edge by the f64
     // edge signs, as hit_triangle1 does.
-    let s = simd::splat(BARY_SAFE) * (r.dlen * b.n_len / dn.abs());
+    // |n| as TriangleSoa::new computes it (n.length(): the same products, sums and sqrt).
+    let n_len = b.n.dot(b.n).sqrt();
+    let s = simd::splat(BARY_SAFE) * (r.dlen * n_len / dn.abs());
     let ns = -s;
     let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
     let near = simd::ge(b0, ns) & simd::ge(b1, ns) & simd::ge(b2, ns);
     let mut bits = simd::bitmask(mask & sure);
     let mut unsure = simd::bitmask(simd::and_not(mask & near, sure));
+    if bits | unsure == 0 {
+        return None;
+    }
+    let ids = &accel.wide.ids[block];
     while unsure != 0 {
         let lane = unsure.trailing_zeros() as usize;
         unsure &= unsure - 1;
-        if inside_f64(accel, b.slot[lane] as usize, r.o1, r.d1) {
+        if inside_f64(accel, ids.slot[lane] as usize, r.o1, r.d1) {
             bits |= 1 << lane;
         }
     }
@@ -104,7 +111,7 @@ pub fn hit_block1(accel: &Accel, b: &TriBlock8, r: &RayWide, tfar: f32, cull: bo
     while bits != 0 {
         let lane = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        let tri = b.prim[lane];
+        let tri = ids.prim[lane];
         if best.is_none_or(|h| t[lane] < h.t || (t[lane] == h.t && tri < h.tri)) {
             best = Some(Hit {
                 tri,
@@ -203,8 +210,8 @@ pub(super) fn walk<const ANY_HIT: bool>(
             }
         } else {
             let (first, count) = leaf_blocks(cur);
-            for b in &bvh.blocks[first..first + count] {
-                if let Some(h) = hit_block1(accel, b, r, tfar, cull) {
+            for block in first..first + count {
+                if let Some(h) = hit_block1(accel, block, r, tfar, cull) {
                     if ANY_HIT {
                         return Some(h);
                     }
