@@ -36,18 +36,29 @@ impl TriangleSoa {
     /// with `n = 0`, so its plane test computes `0 / 0 = NaN`, which fails the depth test:
     /// zero-area triangles are never hit.
     pub fn new(tris: &[[Vec3; 3]], order: &[u32]) -> Self {
-        let mut s = TriangleSoa::default();
         let len = order.len();
-        for a in [
-            &mut s.v0, &mut s.v1, &mut s.v2, &mut s.n, &mut s.p1, &mut s.p2,
-        ] {
-            for c in a.iter_mut() {
-                c.reserve_exact(len);
-            }
-        }
-        s.n_len.reserve_exact(len);
-        s.prim.reserve_exact(len);
-        for &p in order {
+        let col = || vec![0f32; len];
+        let cols = || [col(), col(), col()];
+        let mut s = TriangleSoa {
+            v0: cols(),
+            v1: cols(),
+            v2: cols(),
+            n: cols(),
+            p1: cols(),
+            p2: cols(),
+            n_len: col(),
+            prim: order.to_vec(),
+        };
+        // One pass, every column written at the same index: slices of exactly `len`
+        // elements let the compiler drop the bounds checks.
+        let [v0x, v0y, v0z] = s.v0.each_mut().map(|c| &mut c[..len]);
+        let [v1x, v1y, v1z] = s.v1.each_mut().map(|c| &mut c[..len]);
+        let [v2x, v2y, v2z] = s.v2.each_mut().map(|c| &mut c[..len]);
+        let [nx, ny, nz] = s.n.each_mut().map(|c| &mut c[..len]);
+        let [p1x, p1y, p1z] = s.p1.each_mut().map(|c| &mut c[..len]);
+        let [p2x, p2y, p2z] = s.p2.each_mut().map(|c| &mut c[..len]);
+        let n_len = &mut s.n_len[..len];
+        for (i, &p) in order.iter().enumerate() {
             let [a, b, c] = tris[p as usize];
             let n = (b - a).cross(c - a);
             let nn = n.dot(n);
@@ -56,16 +67,13 @@ impl TriangleSoa {
             } else {
                 (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO)
             };
-            for k in 0..3 {
-                s.v0[k].push(a[k]);
-                s.v1[k].push(b[k]);
-                s.v2[k].push(c[k]);
-                s.n[k].push(n[k]);
-                s.p1[k].push(p1[k]);
-                s.p2[k].push(p2[k]);
-            }
-            s.n_len.push(n.length());
-            s.prim.push(p);
+            (v0x[i], v0y[i], v0z[i]) = (a.x, a.y, a.z);
+            (v1x[i], v1y[i], v1z[i]) = (b.x, b.y, b.z);
+            (v2x[i], v2y[i], v2z[i]) = (c.x, c.y, c.z);
+            (nx[i], ny[i], nz[i]) = (n.x, n.y, n.z);
+            (p1x[i], p1y[i], p1z[i]) = (p1.x, p1.y, p1.z);
+            (p2x[i], p2y[i], p2z[i]) = (p2.x, p2.y, p2.z);
+            n_len[i] = n.length();
         }
         s
     }
