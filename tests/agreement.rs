@@ -187,13 +187,23 @@ fn check_packets(
     Ok(())
 }
 
+/// The tree under test: whitted's binned SAH builder or an obvhs preset (both must give
+/// every engine the same hits).
+fn builder(binned: bool) -> BuildQuality {
+    if binned {
+        BuildQuality::Binned
+    } else {
+        BuildQuality::Medium
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
 
     /// Packet == wide == scalar == brute force on random triangle soups, culled and not.
     #[test]
-    fn packet_equals_scalar_equals_brute_force((tris, rays) in scene(), masks in prop::collection::vec(any::<u8>(), 1..4), cull in any::<bool>()) {
-        let accel = Accel::build(&tris, BuildQuality::Medium);
+    fn packet_equals_scalar_equals_brute_force((tris, rays) in scene(), masks in prop::collection::vec(any::<u8>(), 1..4), cull in any::<bool>(), binned in any::<bool>()) {
+        let accel = Accel::build(&tris, builder(binned));
         check_packets(&accel, &rays, &masks, cull)?;
     }
 
@@ -201,8 +211,8 @@ proptest! {
     /// blocks and every octant order (up to 600 triangles: BVH2 leaves of up to 8, merged
     /// subtrees, nodes of 2 to 8 children).
     #[test]
-    fn engines_agree_on_deep_trees((tris, rays) in big_scene(), masks in prop::collection::vec(any::<u8>(), 1..4), cull in any::<bool>()) {
-        let accel = Accel::build(&tris, BuildQuality::Medium);
+    fn engines_agree_on_deep_trees((tris, rays) in big_scene(), masks in prop::collection::vec(any::<u8>(), 1..4), cull in any::<bool>(), binned in any::<bool>()) {
+        let accel = Accel::build(&tris, builder(binned));
         prop_assert!(accel.wide.depth >= 1);
         check_packets(&accel, &rays, &masks, cull)?;
     }
@@ -261,18 +271,20 @@ fn packet_equals_scalar_on_closed_meshes_at_vertices_and_edges() {
             .iter()
             .map(|t| t.map(|i| mesh.positions[i as usize]))
             .collect();
-        let accel = Accel::build(&tris, BuildQuality::Medium);
-        let mut rays = Vec::new();
-        for (k, p) in mesh.positions.iter().enumerate() {
-            let origin = Vec3::new(
-                (k as f32 * 0.7).sin() * 5.0,
-                (k as f32 * 1.3).cos() * 5.0,
-                3.0,
-            );
-            rays.push(Ray::new(origin, *p - origin, 0.0, f32::INFINITY));
-        }
-        for cull in [false, true] {
-            check_packets(&accel, &rays, &[0xFF, 0b1011_0110], cull).unwrap();
+        for quality in [BuildQuality::Binned, BuildQuality::Medium] {
+            let accel = Accel::build(&tris, quality);
+            let mut rays = Vec::new();
+            for (k, p) in mesh.positions.iter().enumerate() {
+                let origin = Vec3::new(
+                    (k as f32 * 0.7).sin() * 5.0,
+                    (k as f32 * 1.3).cos() * 5.0,
+                    3.0,
+                );
+                rays.push(Ray::new(origin, *p - origin, 0.0, f32::INFINITY));
+            }
+            for cull in [false, true] {
+                check_packets(&accel, &rays, &[0xFF, 0b1011_0110], cull).unwrap();
+            }
         }
     }
 }
@@ -280,7 +292,19 @@ fn packet_equals_scalar_on_closed_meshes_at_vertices_and_edges() {
 /// Rays from inside closed meshes aimed at every vertex and at points on every edge must hit
 /// something (no culling): the leak count is 0. A double hit on an edge is fine.
 fn leaks(tris: &[[Vec3; 3]], origins: &[Vec3], targets: &[Vec3]) -> (usize, usize) {
-    let accel = Accel::build(tris, BuildQuality::Medium);
+    let (a, b) = leaks_on(tris, origins, targets, BuildQuality::Binned);
+    let (c, d) = leaks_on(tris, origins, targets, BuildQuality::Medium);
+    (a + c, b + d)
+}
+
+/// `leaks` on one builder's tree.
+fn leaks_on(
+    tris: &[[Vec3; 3]],
+    origins: &[Vec3],
+    targets: &[Vec3],
+    quality: BuildQuality,
+) -> (usize, usize) {
+    let accel = Accel::build(tris, quality);
     let mut rays = Vec::new();
     for o in origins {
         for t in targets {

@@ -327,3 +327,33 @@ fn bench_size_options() {
     let e = bench_mesh(&cube, &huge).unwrap_err().to_string();
     assert!(e.contains("over the cap"), "{e}");
 }
+
+/// `--quality` picks the BVH2 builder by name (all give the same hits) and names it in the
+/// report; an unknown name is refused with the list.
+#[test]
+fn bench_quality_names_the_builder() {
+    use whitted::bench::{Options, bench_mesh};
+    let cube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let mut hits = vec![];
+    for q in ["binned", "fast", "medium", "slow"] {
+        let opts = Options {
+            width: 32,
+            height: 18,
+            reps: 1,
+            no_peer: true,
+            quality: Some(q.into()),
+            ..Options::default()
+        };
+        let r = bench_mesh(&cube, &opts).unwrap();
+        assert_eq!(r.builder, q);
+        hits.push(r.measured[0].results.clone());
+    }
+    assert!(hits.windows(2).all(|w| w[0] == w[1]));
+    let bad = Options {
+        quality: Some("best".into()),
+        no_peer: true,
+        ..Options::default()
+    };
+    let e = bench_mesh(&cube, &bad).unwrap_err().to_string();
+    assert!(e.contains("binned, fast, medium or slow"), "{e}");
+}

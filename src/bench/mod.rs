@@ -65,7 +65,7 @@ pub struct Options {
     /// Do not run the peer even when it is found.
     #[cfg_attr(feature = "cli", arg(long))]
     pub no_peer: bool,
-    /// whitted's BVH build preset: fast, medium or slow (default: the renderer's). The peer
+    /// whitted's BVH builder: binned (its own), or the obvhs presets fast, medium or slow (default: the renderer's). The peer
     /// always builds at Embree's MEDIUM.
     #[cfg_attr(feature = "cli", arg(long))]
     pub quality: Option<String>,
@@ -107,14 +107,14 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     let reps = opts.reps.clamp(1, 64);
     let quality = match opts.quality.as_deref() {
         None => BuildQuality::default(),
-        Some("fast") => BuildQuality::Fast,
-        Some("medium") => BuildQuality::Medium,
-        Some("slow") => BuildQuality::Slow,
-        Some(q) => {
-            return Err(crate::Error::Usage(format!(
-                "--quality {q}: expected fast, medium or slow"
-            )));
-        }
+        Some(q) => BuildQuality::ALL
+            .into_iter()
+            .find(|b| b.name() == q)
+            .ok_or_else(|| {
+                crate::Error::Usage(format!(
+                    "--quality {q}: expected binned, fast, medium or slow"
+                ))
+            })?,
     };
     let (accel, build) = time_build(&tris, reps, quality);
     let work = Workloads::generate(&mesh, &accel, width, height);
@@ -142,6 +142,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
         build,
         wide_bytes: accel.wide.bytes(),
         collapse_ms: accel.collapse_time.as_secs_f64() * 1e3,
+        builder: quality.name(),
         measured,
         peer,
     })

@@ -30,6 +30,8 @@ pub struct Report {
     pub wide_bytes: usize,
     /// Of the last build, the 8-wide collapse (ms).
     pub collapse_ms: f64,
+    /// The BVH2 builder (`binned`, or the obvhs preset `fast` / `medium` / `slow`).
+    pub builder: &'static str,
     /// Every engine on every workload.
     pub measured: Vec<Measured>,
     /// The peer's figures, or why there are none.
@@ -123,7 +125,11 @@ pub fn format_report(r: &Report) -> String {
     let peer = r.peer.as_ref().ok();
     let _ = write!(
         s,
-        "BVH build (obvhs BVH2 + 8-wide collapse, 1 thread): best {:.2} ms, median {:.2} ms (collapse {:.2} ms), wide tree {:.1} bytes/triangle",
+        "BVH build ({} BVH2 + 8-wide collapse, 1 thread): best {:.2} ms, median {:.2} ms (collapse {:.2} ms), wide tree {:.1} bytes/triangle",
+        match r.builder {
+            "binned" => "binned SAH",
+            b => b,
+        },
         r.build.wall_best * 1e3,
         r.build.wall_median * 1e3,
         r.collapse_ms,
@@ -341,6 +347,7 @@ pub fn report_json(r: &Report) -> serde_json::Value {
         "engine_mismatches": r.mismatches(),
         "wide_bytes": r.wide_bytes,
         "collapse_ms": r.collapse_ms,
+        "builder": r.builder,
         "secondary_rays_from": "whitted's own primary hits (match Embree's sets to ~1 ulp)",
         "peer": match &r.peer {
             Ok(p) => json!({"version": p.version, "build_best_ms": p.build_best_ms,
