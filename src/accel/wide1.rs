@@ -190,9 +190,23 @@ pub(super) fn walk<const ANY_HIT: bool>(
             let node = &bvh.nodes[cur as usize];
             let (bits, lo) = hit_node1(node, r, tfar);
             if bits != 0 {
-                if bits & (bits - 1) == 0 {
+                let rest = bits & (bits - 1);
+                if rest == 0 {
                     // one child: descend.
                     cur = node.child[bits.trailing_zeros() as usize];
+                    continue;
+                }
+                if rest & (rest - 1) == 0 {
+                    // two children (the usual case): nearer first by entry distance, the
+                    // other pushed.
+                    let (a, b) = (
+                        bits.trailing_zeros() as usize,
+                        rest.trailing_zeros() as usize,
+                    );
+                    let (near, far) = if lo[b] < lo[a] { (b, a) } else { (a, b) };
+                    stack[sp] = (node.child[far], lo[far]);
+                    sp += 1;
+                    cur = node.child[near];
                     continue;
                 }
                 // several: push the hit ones farthest first in the octant's order (no
