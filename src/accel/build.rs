@@ -19,6 +19,7 @@
 
 use super::Node;
 use glam::{Vec3, Vec3A};
+use rayon::prelude::*;
 
 /// Centroid bins per axis.
 pub const BINS: usize = 16;
@@ -82,37 +83,111 @@ struct Task {
 }
 
 /// Build over `tris`: the nodes (root at 0, unpadded boxes) and the triangle order
-/// (`order[slot]` = index into `tris`). `tris` must not be empty.
+/// (`order[slot]` = index into `tris`). `tris` must not be empty. Subtrees of at least
+/// [`PARALLEL_MIN`] triangles are built on rayon's current pool, two at a time; the tree is
+/// the same whatever the number of threads.
 pub fn build_bvh2(tris: &[[Vec3; 3]]) -> (Vec<Node>, Vec<u32>) {
-    let n = tris.len();
-    let mut lo = Vec::with_capacity(n);
-    let mut hi = Vec::with_capacity(n);
-    let mut root = Box3::EMPTY;
-    let mut cent = Box3::EMPTY;
-    for t in tris {
-        let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
-        let (l, h) = (a.min(b).min(c), a.max(b).max(c));
-        root.grow(l, h);
-        cent.grow(l + h, l + h);
-        lo.push(l);
-        hi.push(h);
+    let (mut lo, mut hi): (Vec<Vec3A>, Vec<Vec3A>) = tris
+        .par_iter()
+        .with_min_len(4096)
+        .map(|t| {
+            let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
+            (a.min(b).min(c), a.max(b).max(c))
+        })
+        .unzip();
+    let (root, cent) = lo
+        .par_iter()
+        .zip(&hi)
+        .with_min_len(4096)
+        .fold(
+            || (Box3::EMPTY, Box3::EMPTY),
+            |(mut b, mut c), (&l, &h)| {
+                b.grow(l, h);
+                c.grow(l + h, l + h);
+                (b, c)
+            },
+        )
+        .reduce(
+            || (Box3::EMPTY, Box3::EMPTY),
+            |(b0, c0), (b1, c1)| (b0.join(b1), c0.join(c1)),
+        );
+    let mut ids: Vec<u32> = (0..tris.len() as u32).collect();
+    let prims = Prims::new(&mut lo, &mut hi, &mut ids);
+    let nodes = subtree(prims, 0, root, cent, 0);
+    (nodes, ids)
+}
+
+/// Subtrees of at least this many triangles split their two halves across threads.
+pub const PARALLEL_MIN: usize = 1 << 14;
+
+/// The subtree over `p` (slots `offset ..` of the whole order), its box `bbox` and centroid
+/// box `cent`, at `depth`: nodes with the subtree's root at 0, leaves naming global slots.
+/// Large subtrees split their root here and build both halves with `rayon::join`, then lay
+/// them out as the serial walk would (root, the pair, the left half's nodes, the right
+/// half's), so the result does not depend on the thread count.
+fn subtree(mut p: Prims, offset: usize, bbox: Box3, cent: Box3, depth: u32) -> Vec<Node> {
+    let count = p.lo.len();
+    if count < PARALLEL_MIN || depth >= MEDIAN_DEPTH {
+        return serial(p, offset, bbox, cent, depth);
     }
-    let mut ids: Vec<u32> = (0..n as u32).collect();
-    let mut nodes = Vec::with_capacity(2 * n.div_ceil(2));
-    nodes.push(node_of(root, 0, 0));
+    let t = Task {
+        node: 0,
+        start: 0,
+        end: count,
+        cent,
+        depth,
+    };
+    let s = p.binned(&t).unwrap_or_else(|| p.median(0, count));
+    let Prims { lo, hi, ids, sets } = p;
+    let ((llo, rlo), (lhi, rhi), (lids, rids)) = (
+        lo.split_at_mut(s.mid),
+        hi.split_at_mut(s.mid),
+        ids.split_at_mut(s.mid),
+    );
+    let left = Prims {
+        lo: llo,
+        hi: lhi,
+        ids: lids,
+        sets,
+    };
+    let right = Prims::new(rlo, rhi, rids);
+    let (l, r) = rayon::join(
+        || subtree(left, offset, s.lbox, s.lcent, depth + 1),
+        || subtree(right, offset + s.mid, s.rbox, s.rcent, depth + 1),
+    );
+    // [root, l[0], r[0], l[1..], r[1..]]: a subtree's node i > 0 moves to base + i - 1.
+    let (lbase, rbase) = (3, 3 + l.len() as u32 - 1);
+    let moved = |n: Node, base: u32| {
+        if n.count == 0 {
+            Node {
+                first: base + n.first - 1,
+                ..n
+            }
+        } else {
+            n
+        }
+    };
+    let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
+    nodes.push(node_of(bbox, 1, 0));
+    nodes.push(moved(l[0], lbase));
+    nodes.push(moved(r[0], rbase));
+    nodes.extend(l[1..].iter().map(|&n| moved(n, lbase)));
+    nodes.extend(r[1..].iter().map(|&n| moved(n, rbase)));
+    nodes
+}
+
+/// [`subtree`] on one thread: an explicit stack, depth first.
+fn serial(mut prims: Prims, offset: usize, bbox: Box3, cent: Box3, depth: u32) -> Vec<Node> {
+    let n = prims.lo.len();
+    let mut nodes = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF / 2));
+    nodes.push(node_of(bbox, 0, 0));
     let mut stack = vec![Task {
         node: 0,
         start: 0,
         end: n,
         cent,
-        depth: 0,
+        depth,
     }];
-    let mut prims = Prims {
-        lo: &mut lo,
-        hi: &mut hi,
-        ids: &mut ids,
-        sets: Box::new([[[EMPTY_BIN; BINS]; 3]; 2]),
-    };
     while let Some(t) = stack.pop() {
         let count = t.end - t.start;
         let split = if count <= MAX_LEAF {
@@ -127,7 +202,7 @@ pub fn build_bvh2(tris: &[[Vec3; 3]]) -> (Vec<Node>, Vec<u32>) {
             )
         };
         let Some(s) = split else {
-            nodes[t.node].first = t.start as u32;
+            nodes[t.node].first = (offset + t.start) as u32;
             nodes[t.node].count = count as u32;
             continue;
         };
@@ -153,7 +228,7 @@ pub fn build_bvh2(tris: &[[Vec3; 3]]) -> (Vec<Node>, Vec<u32>) {
             depth,
         });
     }
-    (nodes, ids)
+    nodes
 }
 
 fn node_of(b: Box3, first: u32, count: u32) -> Node {
@@ -165,6 +240,7 @@ fn node_of(b: Box3, first: u32, count: u32) -> Node {
     }
 }
 
+/// Triangle boxes and ids of one subtree, moved together while partitioning.
 struct Prims<'a> {
     lo: &'a mut [Vec3A],
     hi: &'a mut [Vec3A],
@@ -182,7 +258,16 @@ struct Split {
     rcent: Box3,
 }
 
-impl Prims<'_> {
+impl<'a> Prims<'a> {
+    fn new(lo: &'a mut [Vec3A], hi: &'a mut [Vec3A], ids: &'a mut [u32]) -> Prims<'a> {
+        Prims {
+            lo,
+            hi,
+            ids,
+            sets: Box::new([[[EMPTY_BIN; BINS]; 3]; 2]),
+        }
+    }
+
     #[inline(always)]
     fn swap(&mut self, i: usize, j: usize) {
         self.lo.swap(i, j);
@@ -417,6 +502,44 @@ mod tests {
         });
         let depth = check(&tris);
         assert!((12..=30).contains(&depth), "depth {depth}");
+    }
+
+    /// The parallel split gives the serial walk's tree, node for node, on any pool.
+    #[test]
+    fn same_tree_on_any_number_of_threads() {
+        let tris = grid(3 * PARALLEL_MIN, |i| {
+            Vec3::new(
+                (i % 173) as f32,
+                (i / 173) as f32 * 0.7,
+                ((i * 7919) % 31) as f32,
+            )
+        });
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| build_bvh2(&tris))
+        };
+        let one = on(1);
+        assert_eq!(one, on(3));
+        // and the plain serial walk over the same boxes
+        let (mut lo, mut hi): (Vec<Vec3A>, Vec<Vec3A>) = tris
+            .iter()
+            .map(|t| {
+                let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
+                (a.min(b).min(c), a.max(b).max(c))
+            })
+            .unzip();
+        let (mut root, mut cent) = (Box3::EMPTY, Box3::EMPTY);
+        for (&l, &h) in lo.iter().zip(&hi) {
+            root.grow(l, h);
+            cent.grow(l + h, l + h);
+        }
+        let mut ids: Vec<u32> = (0..tris.len() as u32).collect();
+        let nodes = serial(Prims::new(&mut lo, &mut hi, &mut ids), 0, root, cent, 0);
+        assert_eq!(one, (nodes, ids));
+        check(&tris);
     }
 
     #[test]

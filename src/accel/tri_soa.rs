@@ -49,32 +49,34 @@ impl TriangleSoa {
             n_len: col(),
             prim: order.to_vec(),
         };
-        // One pass, every column written at the same index: slices of exactly `len`
-        // elements let the compiler drop the bounds checks.
-        let [v0x, v0y, v0z] = s.v0.each_mut().map(|c| &mut c[..len]);
-        let [v1x, v1y, v1z] = s.v1.each_mut().map(|c| &mut c[..len]);
-        let [v2x, v2y, v2z] = s.v2.each_mut().map(|c| &mut c[..len]);
-        let [nx, ny, nz] = s.n.each_mut().map(|c| &mut c[..len]);
-        let [p1x, p1y, p1z] = s.p1.each_mut().map(|c| &mut c[..len]);
-        let [p2x, p2y, p2z] = s.p2.each_mut().map(|c| &mut c[..len]);
-        let n_len = &mut s.n_len[..len];
-        for (i, &p) in order.iter().enumerate() {
-            let [a, b, c] = tris[p as usize];
-            let n = (b - a).cross(c - a);
-            let nn = n.dot(n);
-            let (n, p1, p2) = if nn.is_finite() && nn >= f32::MIN_POSITIVE {
-                (n, (c - a).cross(n) / nn, n.cross(b - a) / nn)
-            } else {
-                (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO)
-            };
-            (v0x[i], v0y[i], v0z[i]) = (a.x, a.y, a.z);
-            (v1x[i], v1y[i], v1z[i]) = (b.x, b.y, b.z);
-            (v2x[i], v2y[i], v2z[i]) = (c.x, c.y, c.z);
-            (nx[i], ny[i], nz[i]) = (n.x, n.y, n.z);
-            (p1x[i], p1y[i], p1z[i]) = (p1.x, p1.y, p1.z);
-            (p2x[i], p2y[i], p2z[i]) = (p2.x, p2.y, p2.z);
-            n_len[i] = n.length();
-        }
+        let [v0x, v0y, v0z] = &mut s.v0;
+        let [v1x, v1y, v1z] = &mut s.v1;
+        let [v2x, v2y, v2z] = &mut s.v2;
+        let [nx, ny, nz] = &mut s.n;
+        let [p1x, p1y, p1z] = &mut s.p1;
+        let [p2x, p2y, p2z] = &mut s.p2;
+        let cols = Columns([
+            v0x,
+            v0y,
+            v0z,
+            v1x,
+            v1y,
+            v1z,
+            v2x,
+            v2y,
+            v2z,
+            nx,
+            ny,
+            nz,
+            p1x,
+            p1y,
+            p1z,
+            p2x,
+            p2y,
+            p2z,
+            &mut s.n_len,
+        ]);
+        cols.fill(tris, order);
         s
     }
 
@@ -117,5 +119,56 @@ impl TriangleSoa {
     #[inline(always)]
     pub fn p2(&self, i: usize) -> [f32; 3] {
         [self.p2[0][i], self.p2[1][i], self.p2[2][i]]
+    }
+}
+
+/// The float columns of a [`TriangleSoa`] over one range of slots, in field order (`v0`,
+/// `v1`, `v2`, `n`, `p1`, `p2` by axis, then `n_len`).
+struct Columns<'a>([&'a mut [f32]; 19]);
+
+impl<'a> Columns<'a> {
+    /// Fill every column for the triangles `order` (one per slot), halving the range across
+    /// rayon's threads down to runs of 16k slots.
+    fn fill(self, tris: &[[Vec3; 3]], order: &[u32]) {
+        const RUN: usize = 1 << 14;
+        if order.len() > RUN {
+            let mid = order.len() / 2;
+            let (a, b) = self.split_at(mid);
+            rayon::join(
+                || a.fill(tris, &order[..mid]),
+                || b.fill(tris, &order[mid..]),
+            );
+            return;
+        }
+        // Slices of exactly `len` elements let the compiler drop the bounds checks.
+        let len = order.len();
+        let c = self.0.map(|c| &mut c[..len]);
+        for (i, &p) in order.iter().enumerate() {
+            let [a, b, v2] = tris[p as usize];
+            let n = (b - a).cross(v2 - a);
+            let nn = n.dot(n);
+            let (n, p1, p2) = if nn.is_finite() && nn >= f32::MIN_POSITIVE {
+                (n, (v2 - a).cross(n) / nn, n.cross(b - a) / nn)
+            } else {
+                (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO)
+            };
+            for (k, v) in [a, b, v2, n, p1, p2].into_iter().enumerate() {
+                c[3 * k][i] = v.x;
+                c[3 * k + 1][i] = v.y;
+                c[3 * k + 2][i] = v.z;
+            }
+            c[18][i] = n.length();
+        }
+    }
+
+    fn split_at(self, mid: usize) -> (Columns<'a>, Columns<'a>) {
+        let (mut l, mut r) = (Vec::with_capacity(19), Vec::with_capacity(19));
+        for c in self.0 {
+            let (a, b) = c.split_at_mut(mid);
+            l.push(a);
+            r.push(b);
+        }
+        let arr = |v: Vec<&'a mut [f32]>| Columns(v.try_into().expect("19 columns"));
+        (arr(l), arr(r))
     }
 }

@@ -116,7 +116,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
                 ))
             })?,
     };
-    let (accel, build) = time_build(&tris, reps, quality);
+    let (accel, build) = time_build(&tris, reps, quality, threads);
     let work = Workloads::generate(&mesh, &accel, width, height);
     let measured = measure(&accel, &work, threads, reps);
     let peer = if opts.no_peer {

@@ -24,7 +24,7 @@ pub struct Report {
     pub width: u32,
     /// Image height of the camera workloads, pixels.
     pub height: u32,
-    /// BVH build time (seconds; the build runs on one thread).
+    /// BVH build time (seconds; on a pool of `threads`).
     pub build: Timing,
     /// Bytes of the 8-wide tree and its triangle blocks.
     pub wide_bytes: usize,
@@ -125,11 +125,12 @@ pub fn format_report(r: &Report) -> String {
     let peer = r.peer.as_ref().ok();
     let _ = write!(
         s,
-        "BVH build ({} BVH2 + 8-wide collapse, 1 thread): best {:.2} ms, median {:.2} ms (collapse {:.2} ms), wide tree {:.1} bytes/triangle",
+        "BVH build ({} BVH2 + 8-wide collapse, threads {}): best {:.2} ms, median {:.2} ms (collapse {:.2} ms), wide tree {:.1} bytes/triangle",
         match r.builder {
             "binned" => "binned SAH",
             b => b,
         },
+        r.threads,
         r.build.wall_best * 1e3,
         r.build.wall_median * 1e3,
         r.collapse_ms,

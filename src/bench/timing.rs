@@ -115,12 +115,24 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
     all
 }
 
-/// BVH build time over `tris` (whitted's default quality), best and median of `reps` builds
-/// after a warm-up. obvhs builds on one thread.
-pub fn time_build(tris: &[[Vec3; 3]], reps: usize, quality: BuildQuality) -> (Accel, Timing) {
+/// BVH build time over `tris` with `quality`, best and median of `reps` builds after a
+/// warm-up, on a pool of `threads` (whitted's builder splits large subtrees across them; the
+/// obvhs presets build on one).
+pub fn time_build(
+    tris: &[[Vec3; 3]],
+    reps: usize,
+    quality: BuildQuality,
+    threads: usize,
+) -> (Accel, Timing) {
     let mut accel = Accel::default();
-    let t = time_reps(reps, 1, || {
-        accel = Accel::build(tris, quality);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .expect("thread pool");
+    let t = pool.install(|| {
+        time_reps(reps, threads, || {
+            accel = Accel::build(tris, quality);
+        })
     });
     (accel, t)
 }
