@@ -71,7 +71,7 @@ fn build_presets() {
         ("kitten.m", 3),
     ] {
         let tris = tris_of(name, sub);
-        for q in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::Slow] {
+        for q in BuildQuality::ALL {
             let a = Accel::build(&tris, q);
             let speed = if name == "kitten.m" {
                 format!("{:.1}", primary_mrays(&a, PacketShape::Block4x2).0)

@@ -60,9 +60,16 @@ impl RayWide {
 
 /// The plane + barycentric test of one ray against a block's 8 triangles: the nearest lane
 /// hit with `tnear < t < tfar` (smallest `t`, then smallest triangle index) as
-/// `(triangle, t, b1, b2)`. Steps as in `hit_triangle1`, per lane:
+/// `(triangle, t, b1, b2)`; with `ANY_HIT`, any lane's hit (the first lane clear of the
+/// edges, if there is one). Steps as in `hit_triangle1`, per lane:
 #[inline(always)]
-pub fn hit_block1(accel: &Accel, block: usize, r: &RayWide, tfar: f32, cull: bool) -> Option<Hit> {
+pub fn hit_block1<const ANY_HIT: bool>(
+    accel: &Accel,
+    block: usize,
+    r: &RayWide,
+    tfar: f32,
+    cull: bool,
+) -> Option<Hit> {
     let b: &TriBlock8 = &accel.wide.blocks[block];
     // plane hit: t = <v0 - p, n> / <d, n> (in-plane rays, zero-area triangles and unused
     // lanes give inf or NaN and fail the depth test).
@@ -98,6 +105,16 @@ pub fn hit_block1(accel: &Accel, block: usize, r: &RayWide, tfar: f32, cull: boo
         return None;
     }
     let ids = &accel.wide.ids[block];
+    if ANY_HIT && bits != 0 {
+        // any hit will do: the first sure lane, without settling the near-edge ones.
+        let lane = bits.trailing_zeros() as usize;
+        return Some(Hit {
+            tri: ids.prim[lane],
+            t: simd::lanes(t)[lane],
+            b1: simd::lanes(b1)[lane],
+            b2: simd::lanes(b2)[lane],
+        });
+    }
     while unsure != 0 {
         let lane = unsure.trailing_zeros() as usize;
         unsure &= unsure - 1;
@@ -225,7 +242,7 @@ pub(super) fn walk<const ANY_HIT: bool>(
         } else {
             let (first, count) = leaf_blocks(cur);
             for block in first..first + count {
-                if let Some(h) = hit_block1(accel, block, r, tfar, cull) {
+                if let Some(h) = hit_block1::<ANY_HIT>(accel, block, r, tfar, cull) {
                     if ANY_HIT {
                         return Some(h);
                     }
