@@ -6,6 +6,9 @@
 //!   and ids are moved, not indexed, so every pass reads memory in order.
 //! - Nodes above [`SAMPLE`] triangles bin an even sample of about that many (the partition
 //!   still sees every triangle and computes exact child boxes).
+//! - Down to depth [`BIG_DEPTH`], a node also weighs setting its largest triangles apart
+//!   (at least `1 / BIG` of its area: a floor or a wall among small triangles, which binned by
+//!   centroid would stretch every box above the small ones they share a bin with).
 //! - A node of at most [`MAX_LEAF`] triangles is a leaf: the 8-wide collapse makes such a
 //!   subtree one block of 8 lanes anyway, and the packet engine's leaves stay as in the obvhs
 //!   presets (whose leaf cap is also 8). Measured against SAH-terminated leaves (of 1 to 8)
@@ -27,6 +30,12 @@ pub const BINS: usize = 16;
 pub const MAX_LEAF: usize = 8;
 /// Nodes of more triangles bin a sample of about this many.
 pub const SAMPLE: usize = 256;
+/// Down to this depth, a node also considers setting apart its triangles of at least
+/// `1 / BIG` of its box's area (a floor or a wall among many small triangles: binned by
+/// centroid, they share bins with small neighbours and stretch every box above those).
+pub const BIG_DEPTH: u32 = 4;
+/// See [`BIG_DEPTH`].
+pub const BIG: f32 = 32.0;
 /// From this depth on, nodes are split at the middle of their range.
 pub const MEDIAN_DEPTH: u32 = 56;
 
@@ -59,6 +68,12 @@ impl Box3 {
         let e = (self.hi - self.lo).max(Vec3A::ZERO);
         e.x * e.y + e.y * e.z + e.z * e.x
     }
+}
+
+/// Half the surface area of the box `lo .. hi`.
+#[inline(always)]
+fn half_area(lo: Vec3A, hi: Vec3A) -> f32 {
+    Box3 { lo, hi }.area()
 }
 
 #[derive(Clone, Copy)]
@@ -137,7 +152,9 @@ fn subtree(mut p: Prims, offset: usize, bbox: Box3, cent: Box3, depth: u32) -> V
         cent,
         depth,
     };
-    let s = p.binned(&t).unwrap_or_else(|| p.median(0, count));
+    let s = p
+        .binned(&t, bbox.area())
+        .unwrap_or_else(|| p.median(0, count));
     let Prims { lo, hi, ids, sets } = p;
     let ((llo, rlo), (lhi, rhi), (lids, rids)) = (
         lo.split_at_mut(s.mid),
@@ -195,9 +212,15 @@ fn serial(mut prims: Prims, offset: usize, bbox: Box3, cent: Box3, depth: u32) -
         } else if t.depth >= MEDIAN_DEPTH {
             Some(prims.median(t.start, t.end))
         } else {
+            let n = &nodes[t.node];
+            let area = Box3 {
+                lo: Vec3A::from(n.min),
+                hi: Vec3A::from(n.max),
+            }
+            .area();
             Some(
                 prims
-                    .binned(&t)
+                    .binned(&t, area)
                     .unwrap_or_else(|| prims.median(t.start, t.end)),
             )
         };
@@ -300,9 +323,9 @@ impl<'a> Prims<'a> {
         }
     }
 
-    /// The best binned SAH split of task `t`, partitioned in place; `None` when no bin
-    /// boundary separates the centroids.
-    fn binned(&mut self, t: &Task) -> Option<Split> {
+    /// The best binned SAH split of task `t` (whose box has half-area `area`), partitioned in
+    /// place; `None` when no bin boundary separates the centroids.
+    fn binned(&mut self, t: &Task, area: f32) -> Option<Split> {
         let ext = t.cent.hi - t.cent.lo;
         if ext.max_element() <= 0.0 || !ext.is_finite() {
             return None;
@@ -334,7 +357,19 @@ impl<'a> Prims<'a> {
         // triangles falling in the same bin (the usual case: meshes are stored coherently)
         // do not wait on each other's stores.
         let count = t.end - t.start;
-        let stride = (count / SAMPLE).max(1);
+        // near the root, the cost of setting the largest triangles apart; where there are
+        // such triangles the whole node is binned (a sample would likely miss them, and
+        // underrate every split that keeps them).
+        let big_cost = if t.depth <= BIG_DEPTH {
+            self.big_cost(t, area)
+        } else {
+            None
+        };
+        let stride = if big_cost.is_some() {
+            1
+        } else {
+            (count / SAMPLE).max(1)
+        };
         let sets = &mut *self.sets;
         for set in sets.iter_mut() {
             for bins in set.iter_mut() {
@@ -396,11 +431,43 @@ impl<'a> Prims<'a> {
             }
         }
         // k = 0: no boundary with triangles on both sides had a finite cost.
-        let (_, axis, k) = best;
+        let (cost, axis, k) = best;
         if k == 0 {
             return None;
         }
-        // partition in place; the children's boxes and centroid boxes on the way.
+        let cost = cost * stride as f32;
+        // a cheaper split that sets the node's largest triangles apart (near the root only).
+        if big_cost.is_some_and(|b| b < cost) {
+            let limit = area / BIG;
+            return Some(self.partition(t, |l, h| half_area(l, h) >= limit));
+        }
+        let (kk, bit) = (Vec3A::splat(k as f32), 1 << axis);
+        // bin < k exactly when the clamped coordinate is below k.
+        Some(self.partition(t, |l, h| coord(l, h).cmplt(kk).bitmask() & bit != 0))
+    }
+
+    /// SAH cost (area times triangles, summed over both sides) of splitting task `t`, whose
+    /// box has half-area `area`, into the triangles of at least `area / BIG` and the rest;
+    /// `None` when one side would be empty.
+    fn big_cost(&self, t: &Task, area: f32) -> Option<f32> {
+        let limit = area / BIG;
+        let (mut big, mut rest) = (EMPTY_BIN, EMPTY_BIN);
+        for (&l, &h) in self.lo[t.start..t.end].iter().zip(&self.hi[t.start..t.end]) {
+            let side = if half_area(l, h) >= limit {
+                &mut big
+            } else {
+                &mut rest
+            };
+            side.b.grow(l, h);
+            side.n += 1;
+        }
+        (big.n > 0 && rest.n > 0)
+            .then(|| big.b.area() * big.n as f32 + rest.b.area() * rest.n as f32)
+    }
+
+    /// Partition task `t`'s range in place, `left` triangles first, with the children's boxes
+    /// and centroid boxes.
+    fn partition(&mut self, t: &Task, left: impl Fn(Vec3A, Vec3A) -> bool) -> Split {
         let (mut i, mut j) = (t.start, t.end);
         let mut s = Split {
             mid: 0,
@@ -409,9 +476,6 @@ impl<'a> Prims<'a> {
             lcent: Box3::EMPTY,
             rcent: Box3::EMPTY,
         };
-        let (kk, bit) = (Vec3A::splat(k as f32), 1 << axis);
-        // bin < k exactly when the clamped coordinate is below k.
-        let left = |l: Vec3A, h: Vec3A| coord(l, h).cmplt(kk).bitmask() & bit != 0;
         // Hoare's scheme: each triangle is classified once, and only misplaced pairs move.
         loop {
             while i < j && left(self.lo[i], self.hi[i]) {
@@ -441,7 +505,7 @@ impl<'a> Prims<'a> {
             i += 1;
         }
         s.mid = i;
-        Some(s)
+        s
     }
 }
 
@@ -540,6 +604,37 @@ mod tests {
         let nodes = serial(Prims::new(&mut lo, &mut hi, &mut ids), 0, root, cent, 0);
         assert_eq!(one, (nodes, ids));
         check(&tris);
+    }
+
+    /// A floor under many small triangles is set apart at the root (binned by centroid it
+    /// would share a bin with the lowest small ones and stretch every box above them).
+    #[test]
+    fn a_floor_is_set_apart_at_the_root() {
+        let mut tris = grid(30_000, |i| {
+            Vec3::new(
+                (i % 50) as f32 * 0.02,
+                (i / 50 % 30) as f32 * 0.02,
+                (i / 1500) as f32 * 0.02,
+            )
+        });
+        let n = tris.len();
+        let p = |x: f32, z: f32| Vec3::new(x, -1.0, z);
+        tris.push([p(-6.0, -6.0), p(-6.0, 6.0), p(6.0, 6.0)]);
+        tris.push([p(-6.0, -6.0), p(6.0, 6.0), p(6.0, -6.0)]);
+        check(&tris);
+        let (nodes, order) = build_bvh2(&tris);
+        let root = nodes[0];
+        let floor_leaf = [root.first, root.first + 1].into_iter().any(|c| {
+            let c = nodes[c as usize];
+            c.count == 2
+                && order[c.first as usize..][..2]
+                    .iter()
+                    .all(|&p| p as usize >= n)
+        });
+        assert!(
+            floor_leaf,
+            "the two floor triangles are one child of the root"
+        );
     }
 
     #[test]
