@@ -1,4 +1,5 @@
-//! Acceleration: an obvhs BVH2 flattened into compact nodes, and the triangles in BVH order.
+//! Acceleration: a BVH2 (whitted's binned SAH builder, or an obvhs preset) as compact nodes,
+//! the triangles in BVH order, and the 8-wide collapse of the tree.
 
 pub mod build;
 pub mod hybrid8;

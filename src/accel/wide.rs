@@ -1,4 +1,4 @@
-//! The 8-wide BVH: the obvhs BVH2 collapsed into nodes of up to 8 children whose boxes are
+//! The 8-wide BVH: the BVH2 (`build.rs`, or an obvhs preset) collapsed into nodes of up to 8 children whose boxes are
 //! stored SoA (one ray meets all 8 boxes in one slab test), and leaves of SoA triangle blocks
 //! (one ray against up to 8 triangles in lanes, with `hit_triangle1`'s arithmetic).
 //!
