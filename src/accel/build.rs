@@ -281,6 +281,20 @@ struct Split {
     rcent: Box3,
 }
 
+impl Split {
+    /// Grow the left (`left`) or right child's box and centroid box by one triangle's box.
+    #[inline(always)]
+    fn take(&mut self, left: bool, l: Vec3A, h: Vec3A) {
+        let (b, c) = if left {
+            (&mut self.lbox, &mut self.lcent)
+        } else {
+            (&mut self.rbox, &mut self.rcent)
+        };
+        b.grow(l, h);
+        c.grow(l + h, l + h);
+    }
+}
+
 impl<'a> Prims<'a> {
     fn new(lo: &'a mut [Vec3A], hi: &'a mut [Vec3A], ids: &'a mut [u32]) -> Prims<'a> {
         Prims {
@@ -479,16 +493,12 @@ impl<'a> Prims<'a> {
         // Hoare's scheme: each triangle is classified once, and only misplaced pairs move.
         loop {
             while i < j && left(self.lo[i], self.hi[i]) {
-                s.lbox.grow(self.lo[i], self.hi[i]);
-                s.lcent
-                    .grow(self.lo[i] + self.hi[i], self.lo[i] + self.hi[i]);
+                s.take(true, self.lo[i], self.hi[i]);
                 i += 1;
             }
             while i < j && !left(self.lo[j - 1], self.hi[j - 1]) {
                 j -= 1;
-                s.rbox.grow(self.lo[j], self.hi[j]);
-                s.rcent
-                    .grow(self.lo[j] + self.hi[j], self.lo[j] + self.hi[j]);
+                s.take(false, self.lo[j], self.hi[j]);
             }
             if i >= j {
                 break;
@@ -496,12 +506,8 @@ impl<'a> Prims<'a> {
             // lo[i] belongs right and lo[j - 1] left: swap them into place.
             j -= 1;
             self.swap(i, j);
-            s.lbox.grow(self.lo[i], self.hi[i]);
-            s.lcent
-                .grow(self.lo[i] + self.hi[i], self.lo[i] + self.hi[i]);
-            s.rbox.grow(self.lo[j], self.hi[j]);
-            s.rcent
-                .grow(self.lo[j] + self.hi[j], self.lo[j] + self.hi[j]);
+            s.take(true, self.lo[i], self.hi[i]);
+            s.take(false, self.lo[j], self.hi[j]);
             i += 1;
         }
         s.mid = i;
