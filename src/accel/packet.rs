@@ -6,28 +6,31 @@
 
 use super::hybrid8::hand_off;
 use super::scalar::{BARY_SAFE, inside_f64};
+use super::tri_soa::LeafView;
 use super::wide::NO_ENTRY;
 use super::{Accel, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8, U32x8, Vec3x8};
 
-/// The plane + barycentric test of SoA slot `i` against 8 rays. Returns the lanes that hit
-/// with `tnear < t < tfar` and their `(t, b1, b2)`; `dlen` is `|d|` per lane (computed once
-/// per packet, as `Ray1` does per ray). Steps as in `hit_triangle1`:
+/// The plane + barycentric test of the `j`-th triangle of `leaf` (SoA slot `leaf.first + j`)
+/// against 8 rays. Returns the lanes that hit with `tnear < t < tfar` and their
+/// `(t, b1, b2)`; `dlen` is `|d|` per lane (computed once per packet, as `Ray1` does per
+/// ray). Steps as in `hit_triangle1`:
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn hit_triangle8(
     accel: &Accel,
-    i: usize,
+    leaf: &LeafView,
+    j: usize,
     rays: &RayPacket8,
     dlen: F32x8,
     tfar: F32x8,
     active: M32x8,
     cull: bool,
 ) -> (M32x8, F32x8, F32x8, F32x8) {
-    let tri = &accel.tris;
-    let n = Vec3x8::splat(tri.n(i));
-    let v0 = Vec3x8::splat(tri.v0(i));
+    let n = Vec3x8::splat(leaf.n(j));
+    let v0 = Vec3x8::splat(leaf.v0(j));
     // plane hit: t = <v0 - p, n> / <d, n> (in-plane rays and zero-area triangles give
     // inf or NaN and fail the depth test).
     let dn = rays.d.dot(n);
@@ -48,12 +51,12 @@ pub fn hit_triangle8(
     // barycentric: signed sub-triangle areas over the whole, as linear forms of w = q - v0.
     let q = rays.o + rays.d * t;
     let w = q - v0;
-    let b1 = w.dot(Vec3x8::splat(tri.p1(i)));
-    let b2 = w.dot(Vec3x8::splat(tri.p2(i)));
+    let b1 = w.dot(Vec3x8::splat(leaf.p1(j)));
+    let b2 = w.dot(Vec3x8::splat(leaf.p2(j)));
     let b0 = simd::splat(1.0) - b1 - b2;
     // inside when no coordinate is negative: clear lanes here, lanes within BARY_SAFE of an
     // edge by the f64 edge signs, exactly as hit_triangle1 does.
-    let s = simd::splat(BARY_SAFE) * (dlen * simd::splat(tri.n_len[i]) / dn.abs());
+    let s = simd::splat(BARY_SAFE) * (dlen * simd::splat(leaf.n_len(j)) / dn.abs());
     let ns = -s;
     let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
     let near = simd::ge(b0, ns) & simd::ge(b1, ns) & simd::ge(b2, ns);
@@ -61,6 +64,7 @@ pub fn hit_triangle8(
     let mut hit = mask & sure;
     if simd::any(unsure) {
         let bits = simd::bitmask(unsure);
+        let i = leaf.first + j;
         let mut resolved = 0;
         for lane in 0..simd::LANES {
             if bits >> lane & 1 == 1 && inside_f64(accel, i, rays.o.lane(lane), rays.d.lane(lane)) {
@@ -158,9 +162,11 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
                 }
             }
         } else if n.count > 0 {
-            for slot in n.first..n.first + n.count {
-                let slot = slot as usize;
-                let (mask, t, b1, b2) = hit_triangle8(accel, slot, rays, dlen, tfar, here, cull);
+            let leaf = accel.tris.leaf(n.first as usize, n.count as usize);
+            for j in 0..leaf.len() {
+                let slot = leaf.first + j;
+                let (mask, t, b1, b2) =
+                    hit_triangle8(accel, &leaf, j, rays, dlen, tfar, here, cull);
                 if simd::none(mask) {
                     continue;
                 }

@@ -122,6 +122,77 @@ impl TriangleSoa {
     }
 }
 
+/// What the plane + barycentric test reads of the slots `first .. first + len` (a leaf):
+/// each column sliced once, so a loop over the leaf's triangles indexes slices whose length
+/// it knows, with no bounds check per triangle and column.
+#[derive(Clone, Copy, Debug)]
+pub struct LeafView<'a> {
+    /// The first slot.
+    pub first: usize,
+    n: [&'a [f32]; 3],
+    v0: [&'a [f32]; 3],
+    p1: [&'a [f32]; 3],
+    p2: [&'a [f32]; 3],
+    n_len: &'a [f32],
+}
+
+impl<'a> LeafView<'a> {
+    /// Triangles in the leaf.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.n_len.len()
+    }
+    /// Whether the leaf has no triangles.
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.n_len.is_empty()
+    }
+    /// `n` of the leaf's `j`-th triangle.
+    #[inline(always)]
+    pub fn n(&self, j: usize) -> [f32; 3] {
+        self.n.map(|c| c[j])
+    }
+    /// `v0` of the leaf's `j`-th triangle.
+    #[inline(always)]
+    pub fn v0(&self, j: usize) -> [f32; 3] {
+        self.v0.map(|c| c[j])
+    }
+    /// `p1` of the leaf's `j`-th triangle.
+    #[inline(always)]
+    pub fn p1(&self, j: usize) -> [f32; 3] {
+        self.p1.map(|c| c[j])
+    }
+    /// `p2` of the leaf's `j`-th triangle.
+    #[inline(always)]
+    pub fn p2(&self, j: usize) -> [f32; 3] {
+        self.p2.map(|c| c[j])
+    }
+    /// `|n|` of the leaf's `j`-th triangle.
+    #[inline(always)]
+    pub fn n_len(&self, j: usize) -> f32 {
+        self.n_len[j]
+    }
+}
+
+impl TriangleSoa {
+    /// The slots `first .. first + count` as a [`LeafView`] (panics if out of range).
+    #[inline(always)]
+    pub fn leaf(&self, first: usize, count: usize) -> LeafView<'_> {
+        let r = first..first + count;
+        fn cut(c: &[Vec<f32>; 3], r: std::ops::Range<usize>) -> [&[f32]; 3] {
+            [&c[0][r.clone()], &c[1][r.clone()], &c[2][r]]
+        }
+        LeafView {
+            first,
+            n: cut(&self.n, r.clone()),
+            v0: cut(&self.v0, r.clone()),
+            p1: cut(&self.p1, r.clone()),
+            p2: cut(&self.p2, r.clone()),
+            n_len: &self.n_len[r],
+        }
+    }
+}
+
 /// The float columns of a [`TriangleSoa`] over one range of slots, in field order (`v0`,
 /// `v1`, `v2`, `n`, `p1`, `p2` by axis, then `n_len`).
 struct Columns<'a>([&'a mut [f32]; 19]);
