@@ -43,10 +43,10 @@ pub fn leaf_blocks(r: u32) -> (usize, usize) {
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub struct Node8 {
-    /// Minimum corner of each child's box, SoA: lane `i` is child `i` (0 in unused slots).
-    pub min: [F32x8; 3],
-    /// Maximum corner of each child's box, SoA like `min`.
-    pub max: [F32x8; 3],
+    /// The children's boxes, SoA: `bounds[0][axis]` lane `i` is the minimum corner of child
+    /// `i`, `bounds[1][axis]` its maximum corner (0 in unused slots). Corners are indexed (not
+    /// named) so a ray picks each axis's near and far plane by a precomputed index.
+    pub bounds: [[F32x8; 3]; 2],
     /// Reference per slot: a `nodes` index, or a leaf with [`LEAF_BIT`] set (see [`leaf_blocks`]).
     pub child: [u32; BLOCK],
     /// Per octant (bit `k` set: direction component `k` negative), 8 slot indices of 3 bits,
@@ -206,19 +206,19 @@ impl Bvh8 {
 impl Node8 {
     fn set_child(&mut self, slot: usize, box_: &Node, r: u32) {
         for k in 0..3 {
-            let mut lo = simd::lanes(self.min[k]);
-            let mut hi = simd::lanes(self.max[k]);
+            let mut lo = simd::lanes(self.bounds[0][k]);
+            let mut hi = simd::lanes(self.bounds[1][k]);
             lo[slot] = box_.min[k];
             hi[slot] = box_.max[k];
-            self.min[k] = simd::from_lanes(lo);
-            self.max[k] = simd::from_lanes(hi);
+            self.bounds[0][k] = simd::from_lanes(lo);
+            self.bounds[1][k] = simd::from_lanes(hi);
         }
         self.child[slot] = r;
     }
 
     /// The per-octant visiting orders of the first `n` slots, and the in-use bits.
     fn set_order(&mut self, n: usize) {
-        let (lo, hi) = (self.min.map(simd::lanes), self.max.map(simd::lanes));
+        let [lo, hi] = self.bounds.map(|c| c.map(simd::lanes));
         let centre: [[f32; 3]; BLOCK] =
             std::array::from_fn(|i| std::array::from_fn(|k| lo[k][i] + hi[k][i]));
         for oct in 0..8 {

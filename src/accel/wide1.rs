@@ -24,8 +24,9 @@ pub struct RayWide {
     pub dlen: F32x8,
     /// [`safe_inv`] of each direction component, in every lane (never `±inf`).
     pub inv: Vec3x8,
-    /// `inv[k] < 0`: the slab's near plane is `max[k]`.
-    pub neg: [bool; 3],
+    /// Per axis, which corner of a box is its near plane (`Node8::bounds[near[k]]`): 1, the
+    /// maximum, where `inv[k] < 0`, else 0; the far plane is the other one.
+    pub near: [usize; 3],
     /// The direction's octant (bit k: component k negative), indexing `Node8::order`.
     pub octant: usize,
     /// Origin, once (for the f64 edge test).
@@ -49,7 +50,7 @@ impl RayWide {
             // |d| as Ray1 computes it, so the grazing margin is the same float.
             dlen: simd::splat((d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt()),
             inv: Vec3x8::splat(inv),
-            neg: inv.map(|v| v < 0.0),
+            near: inv.map(|v| (v < 0.0) as usize),
             octant: (0..3).fold(0, |o, k| o | ((inv[k] < 0.0) as usize) << k),
             o1,
             d1,
@@ -147,11 +148,9 @@ pub fn hit_block1<const ANY_HIT: bool>(
 #[inline(always)]
 pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f32; 8]) {
     let axis = |k: usize, o: F32x8, inv: F32x8| {
-        let (near, far) = if r.neg[k] {
-            (node.max[k], node.min[k])
-        } else {
-            (node.min[k], node.max[k])
-        };
+        // (`& 1`: the index is 0 or 1, which the compiler then knows.)
+        let near = node.bounds[r.near[k] & 1][k];
+        let far = node.bounds[(r.near[k] ^ 1) & 1][k];
         ((near - o) * inv, (far - o) * inv)
     };
     let (nx, fx) = axis(0, r.o.x, r.inv.x);
