@@ -357,3 +357,28 @@ fn bench_quality_names_the_builder() {
     let e = bench_mesh(&cube, &bad).unwrap_err().to_string();
     assert!(e.contains("binned, fast, medium or slow"), "{e}");
 }
+
+/// With no mesh argument, `whitted bench` runs on the kitten whitted ships, found from any
+/// folder without `WHITTED_ASSETS` (as renders find it).
+#[test]
+fn bench_defaults_to_the_shipped_kitten() {
+    let dir = std::env::temp_dir().join(format!("whitted-bench-default-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_whitted"))
+        .args(["bench", "--no-peer", "--reps", "1", "--threads", "1"])
+        .args(["--width", "32", "--height", "18", "--json"])
+        .env_remove("WHITTED_ASSETS")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mesh = json["whitted_bench"][0]["mesh"]
+        .as_str()
+        .unwrap_or_default()
+        .to_owned();
+    assert!(mesh.ends_with("meshes/kitten.m"), "{json}");
+    assert_eq!(json["whitted_bench"][0]["triangles"], 20438, "{json}");
+}

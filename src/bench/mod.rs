@@ -39,7 +39,8 @@ use std::path::{Path, PathBuf};
 #[cfg_attr(feature = "cli", derive(clap::Args))]
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    /// Meshes (`.m` or `.obj`); default `meshes/kitten.m` under `WHITTED_ASSETS`.
+    /// Meshes (`.m` or `.obj`); default `meshes/kitten.m` from the current folder, the
+    /// `WHITTED_ASSETS` folders or the copy whitted ships (the search path of scene files).
     pub meshes: Vec<PathBuf>,
     /// Tracing threads (also the peer's `--threads`); 1 traces on the calling thread.
     #[cfg_attr(feature = "cli", arg(long, short = 't', default_value_t = 1))]
@@ -152,12 +153,9 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
 pub fn run(opts: &Options) -> crate::Result<()> {
     let mut meshes = opts.meshes.clone();
     if meshes.is_empty() {
-        let dir = std::env::var_os("WHITTED_ASSETS")
-            .and_then(|v| std::env::split_paths(&v).next())
-            .ok_or_else(|| {
-                crate::Error::Usage("no mesh given and WHITTED_ASSETS is not set".into())
-            })?;
-        meshes.push(dir.join("meshes/kitten.m"));
+        // the kitten, found as a scene file finds it: the current folder, the WHITTED_ASSETS
+        // folders, then the copy whitted ships.
+        meshes.push(crate::io::scene_file::SearchPath::for_scene(None).resolve("meshes/kitten.m")?);
     }
     let mut reports = vec![];
     for m in &meshes {
