@@ -95,10 +95,10 @@ pub fn and_not(a: M32x8, b: M32x8) -> M32x8 {
 /// A mask from the low 8 bits of `bits` (bit `i` = lane `i`).
 #[inline(always)]
 pub fn mask_from_bits(bits: u32) -> M32x8 {
-    let on = f32::from_bits(u32::MAX);
-    from_lanes(std::array::from_fn(|i| {
-        if bits >> i & 1 == 1 { on } else { 0.0 }
-    }))
+    // lane i keeps bit i of the splat, which equals 1 << i exactly when the bit is set.
+    let lane_bit = U32x8::from([1, 2, 4, 8, 16, 32, 64, 128]);
+    let m = (U32x8::splat(bits) & lane_bit).simd_eq(lane_bit);
+    wide::bytemuck::cast(m)
 }
 /// Whether lane `i` of a mask is set.
 #[inline(always)]
@@ -270,7 +270,21 @@ mod tests {
             lanes(select(m, splat(1.0), splat(-1.0)))[..4],
             [1.0, 1.0, 1.0, -1.0]
         );
-        assert_eq!(bitmask(mask_from_bits(0b1010_0101)), 0b1010_0101);
+        for bits in 0..256 {
+            let m = mask_from_bits(bits);
+            assert_eq!(bitmask(m), bits);
+            // whole lanes: all ones or all zeros
+            assert!(
+                lanes(m)
+                    .iter()
+                    .all(|v| v.to_bits() == 0 || v.to_bits() == u32::MAX)
+            );
+        }
+        assert_eq!(
+            bitmask(mask_from_bits(0x1_00 | 0b11)),
+            0b11,
+            "bits above 7 ignored"
+        );
         assert!(lane_set(m, 2) && !lane_set(m, 3));
         assert!(any(m) && !none(m) && none(and_not(m, m)));
         let ids = select_u32(m, U32x8::splat(7), U32x8::splat(9));

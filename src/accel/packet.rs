@@ -131,7 +131,8 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
     );
     let mut tfar = rays.tfar;
     let dlen = simd::sqrt(rays.d.dot(rays.d));
-    let mut stack: super::scalar::Stack<u32, 64> = super::scalar::Stack::new();
+    // entries: a node and the bits of the lanes that met its box when it was pushed.
+    let mut stack: super::scalar::Stack<(u32, u32), 64> = super::scalar::Stack::new();
     let mut lanes = None;
     let mut node = 0u32;
     let boxes = |n: u32, tfar: F32x8, m: M32x8| {
@@ -202,8 +203,12 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
                     let both = ml & mr;
                     let left_first = simd::bitmask(both & simd::le(tl, tr)).count_ones() * 2
                         >= simd::bitmask(both).count_ones();
-                    let (near, far, m) = if left_first { (l, r, ml) } else { (r, l, mr) };
-                    stack.push(far);
+                    let (near, far, m, mf) = if left_first {
+                        (l, r, ml, mr)
+                    } else {
+                        (r, l, mr, ml)
+                    };
+                    stack.push((far, simd::bitmask(mf)));
                     (node, here) = (near, m);
                     continue;
                 }
@@ -218,12 +223,20 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
                 (false, false) => {}
             }
         }
-        // pop the next node some lane still reaches before its closest hit.
+        // pop the next node some lane still reaches before its closest hit. With ANY_HIT,
+        // `tfar` has not moved since the push, so the lanes that met the box then and are
+        // still active are exactly those a new slab test would find (a lane that missed the
+        // parent's box misses this one too); closest hit tests again with the lanes' new
+        // limits.
         loop {
-            let Some(next) = stack.pop() else {
+            let Some((next, bits)) = stack.pop() else {
                 return (hits, occluded);
             };
-            let (m, _) = boxes(next, tfar, active);
+            let m = if ANY_HIT {
+                active & simd::mask_from_bits(bits)
+            } else {
+                boxes(next, tfar, active).0
+            };
             if simd::any(m) {
                 (node, here) = (next, m);
                 break;
