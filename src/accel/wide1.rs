@@ -261,7 +261,8 @@ pub(super) fn walk<const ANY_HIT: bool>(
             }
             sp -= 1;
             let (next, tentry) = stack[sp];
-            if tentry <= tfar * SLAB_FAR_SCALE {
+            // (any hit: tfar has not moved since the push, which checked this already)
+            if ANY_HIT || tentry <= tfar * SLAB_FAR_SCALE {
                 cur = next;
                 break;
             }
