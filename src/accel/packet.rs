@@ -13,7 +13,7 @@ use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8, U32x8, Vec3x8};
 
-/// The plane + barycentric test of the `j`-th triangle of `leaf` (SoA slot `leaf.first + j`)
+/// The plane + barycentric test of the `j`-th triangle of `leaf` (SoA slot `leaf.slot(j)`)
 /// against 8 rays. Returns the lanes that hit with `tnear < t < tfar` and their
 /// `(t, b1, b2)`; `dlen` is `|d|` per lane (computed once per packet, as `Ray1` does per
 /// ray). Steps as in `hit_triangle1`:
@@ -64,7 +64,7 @@ pub fn hit_triangle8(
     let mut hit = mask & sure;
     if simd::any(unsure) {
         let bits = simd::bitmask(unsure);
-        let i = leaf.first + j;
+        let i = leaf.slot(j);
         let mut resolved = 0;
         for lane in 0..simd::LANES {
             if bits >> lane & 1 == 1 && inside_f64(accel, i, rays.o.lane(lane), rays.d.lane(lane)) {
@@ -165,7 +165,7 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
         } else if n.count > 0 {
             let leaf = accel.tris.leaf(n.first as usize, n.count as usize);
             for j in 0..leaf.len() {
-                let slot = leaf.first + j;
+                let slot = leaf.slot(j);
                 let (mask, t, b1, b2) =
                     hit_triangle8(accel, &leaf, j, rays, dlen, tfar, here, cull);
                 if simd::none(mask) {
@@ -208,7 +208,8 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
                     } else {
                         (r, l, mr, ml)
                     };
-                    stack.push((far, simd::bitmask(mf)));
+                    // (the lane bits serve only any-hit pops; closest hit tests again)
+                    stack.push((far, if ANY_HIT { simd::bitmask(mf) } else { 0 }));
                     (node, here) = (near, m);
                     continue;
                 }

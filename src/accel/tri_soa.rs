@@ -172,6 +172,11 @@ impl<'a> LeafView<'a> {
     pub fn n_len(&self, j: usize) -> f32 {
         self.n_len[j]
     }
+    /// SoA slot of the leaf's `j`-th triangle.
+    #[inline(always)]
+    pub fn slot(&self, j: usize) -> usize {
+        self.first + j
+    }
 }
 
 impl TriangleSoa {

@@ -44,14 +44,15 @@ impl RayWide {
         let o1 = ray.origin.to_array();
         let d1 = ray.dir.to_array();
         let inv = d1.map(safe_inv);
+        let near = inv.map(|v| (v < 0.0) as usize);
         RayWide {
             o: Vec3x8::splat(o1),
             d: Vec3x8::splat(d1),
             // |d| as Ray1 computes it, so the grazing margin is the same float.
             dlen: simd::splat((d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt()),
             inv: Vec3x8::splat(inv),
-            near: inv.map(|v| (v < 0.0) as usize),
-            octant: (0..3).fold(0, |o, k| o | ((inv[k] < 0.0) as usize) << k),
+            near,
+            octant: near[0] | near[1] << 1 | near[2] << 2,
             o1,
             d1,
             tnear: ray.tnear,

@@ -66,8 +66,8 @@ pub struct Options {
     /// Do not run the peer even when it is found.
     #[cfg_attr(feature = "cli", arg(long))]
     pub no_peer: bool,
-    /// whitted's BVH builder: binned (its own), or the obvhs presets fast, medium or slow (default: the renderer's). The peer
-    /// always builds at Embree's MEDIUM.
+    /// whitted's BVH builder: binned (its own), or the obvhs presets fast, medium or slow
+    /// (default: the renderer's). The peer always builds at Embree's MEDIUM.
     #[cfg_attr(feature = "cli", arg(long))]
     pub quality: Option<String>,
 }
