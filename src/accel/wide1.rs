@@ -6,6 +6,7 @@
 //! return: the per-triangle arithmetic is the same, the boxes are the same padded boxes, and
 //! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
 
+use super::packet::FAR_FIRST;
 use super::scalar::{BARY_SAFE, inside_f64};
 use super::wide::{Bvh8, LEAF_BIT, TriBlock8, leaf_blocks};
 use super::{Accel, SLAB_FAR_SCALE, safe_inv};
@@ -220,16 +221,27 @@ pub(super) fn walk<const ANY_HIT: bool>(
                         bits.trailing_zeros() as usize,
                         rest.trailing_zeros() as usize,
                     );
-                    let (near, far) = if lo[b] < lo[a] { (b, a) } else { (a, b) };
-                    stack[sp] = (node.child[far], lo[far]);
+                    // (any hit: farther first, see `FAR_FIRST`)
+                    let (first, later) = if (lo[b] < lo[a]) != (ANY_HIT && FAR_FIRST) {
+                        (b, a)
+                    } else {
+                        (a, b)
+                    };
+                    stack[sp] = (node.child[later], lo[later]);
                     sp += 1;
-                    cur = node.child[near];
+                    cur = node.child[first];
                     continue;
                 }
-                // several: push the hit ones farthest first in the octant's order (no
+                // several: push the hit ones last-visited first in the octant's order (no
                 // branches: every slot is written, the pointer moves only for hit ones),
-                // then continue with the nearest.
-                let order = node.order[r.octant];
+                // then continue with the first. Any hit visits farthest first: the order of
+                // the opposite octant, whose diagonal runs the other way.
+                let octant = if ANY_HIT && FAR_FIRST {
+                    r.octant ^ 7
+                } else {
+                    r.octant
+                };
+                let order = node.order[octant];
                 for k in (0..8).rev() {
                     let slot = (order >> (3 * k) & 7) as usize;
                     stack[sp] = (node.child[slot], lo[slot]);
