@@ -6,7 +6,7 @@
 //! return: the per-triangle arithmetic is the same, the boxes are the same padded boxes, and
 //! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
 
-use super::packet::FAR_FIRST;
+use super::packet::ORIGIN_LAST;
 use super::scalar::{BARY_SAFE, inside_f64};
 use super::wide::{Bvh8, LEAF_BIT, TriBlock8, leaf_blocks};
 use super::{Accel, SLAB_FAR_SCALE, safe_inv};
@@ -221,27 +221,24 @@ pub(super) fn walk<const ANY_HIT: bool>(
                         bits.trailing_zeros() as usize,
                         rest.trailing_zeros() as usize,
                     );
-                    // (any hit: farther first, see `FAR_FIRST`)
-                    let (first, later) = if (lo[b] < lo[a]) != (ANY_HIT && FAR_FIRST) {
-                        (b, a)
+                    // (any hit: the box the ray starts in after the other, see
+                    // `ORIGIN_LAST`)
+                    let b_first = if ANY_HIT && ORIGIN_LAST {
+                        let (ia, ib) = (lo[a] <= r.tnear, lo[b] <= r.tnear);
+                        if ia != ib { ia } else { lo[b] < lo[a] }
                     } else {
-                        (a, b)
+                        lo[b] < lo[a]
                     };
+                    let (first, later) = if b_first { (b, a) } else { (a, b) };
                     stack[sp] = (node.child[later], lo[later]);
                     sp += 1;
                     cur = node.child[first];
                     continue;
                 }
-                // several: push the hit ones last-visited first in the octant's order (no
+                // several: push the hit ones farthest first in the octant's order (no
                 // branches: every slot is written, the pointer moves only for hit ones),
-                // then continue with the first. Any hit visits farthest first: the order of
-                // the opposite octant, whose diagonal runs the other way.
-                let octant = if ANY_HIT && FAR_FIRST {
-                    r.octant ^ 7
-                } else {
-                    r.octant
-                };
-                let order = node.order[octant];
+                // then continue with the nearest.
+                let order = node.order[r.octant];
                 for k in (0..8).rev() {
                     let slot = (order >> (3 * k) & 7) as usize;
                     stack[sp] = (node.child[slot], lo[slot]);
