@@ -42,7 +42,7 @@ pub(super) fn hand_off<const ANY_HIT: bool>(
     let mut occ = 0u32;
     let mut b = simd::bitmask(here);
     STACK.with_borrow_mut(|st| {
-        let need = bvh.depth * 7 + 8;
+        let need = bvh.depth * 7 + 16;
         if st.len() < need {
             st.resize(need, (0, 0.0));
         }

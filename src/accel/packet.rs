@@ -82,8 +82,10 @@ pub fn hit_triangle8(
 /// neighbourhood before reaching the occluder. Where both boxes hold the origin, the one the
 /// ray leaves later goes first (it reaches farther); where neither does, the nearer (a
 /// blocker close to the surface, as under a body's own limbs, is found early). A packet
-/// takes the side most of its lanes prefer. An unoccluded ray visits every box it meets in
-/// any order, and any order finds an occluder when there is one, so answers do not change.
+/// takes the side most of its lanes prefer; `wide1` with three or more hit children pushes
+/// the boxes the ray starts in first, so they come last. An unoccluded ray visits every box
+/// it meets in any order, and any order finds an occluder when there is one, so answers do
+/// not change.
 /// Measured (README, "Engines", instructions of `occluded8`): bench shadow rays 0.85x,
 /// `refraction`'s shadow rays (from inside the glass kitten) 0.73x, `phong`'s 1.04x; visiting
 /// every farther child first measured 0.80x / 0.62x / 1.24x, so the floor scenes rendered

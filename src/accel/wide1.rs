@@ -144,11 +144,11 @@ pub fn hit_block1<const ANY_HIT: bool>(
     best
 }
 
-/// One ray against a node's 8 boxes: the bits of the children met within `[tnear, tfar]`
-/// and their entry distances. Near and far planes are picked per axis by the direction's
+/// One ray against a node's 8 boxes: the bits of the children met within `[tnear, tfar]`,
+/// their entry distances, and the bits of the boxes the ray starts in (entry at `tnear`). Near and far planes are picked per axis by the direction's
 /// sign, which gives exactly `min` / `max` of the two plane distances of `hit_box1`.
 #[inline(always)]
-pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f32; 8]) {
+pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f32; 8], u32) {
     let axis = |k: usize, o: F32x8, inv: F32x8| {
         // (`& 1`: the index is 0 or 1, which the compiler then knows.)
         let near = node.bounds[r.near[k] & 1][k];
@@ -161,7 +161,9 @@ pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f3
     let lo = simd::max(simd::max(nx, ny), simd::max(nz, simd::splat(r.tnear)));
     let hi = simd::min(simd::min(fx, fy), simd::min(fz, simd::splat(tfar)));
     let hit = simd::bitmask(simd::le(lo, hi * simd::splat(SLAB_FAR_SCALE))) & node.valid();
-    (hit, simd::lanes(lo))
+    // (the children whose box the ray starts in: entered no later than tnear)
+    let inside = simd::bitmask(simd::le(lo, simd::splat(r.tnear)));
+    (hit, simd::lanes(lo), inside)
 }
 
 thread_local! {
@@ -178,8 +180,9 @@ fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> 
         return None;
     }
     STACK.with_borrow_mut(|stack| {
-        // each node level leaves at most 7 entries behind, and pushes at most 8 at once.
-        let need = bvh.depth * 7 + 8;
+        // each node level leaves at most 7 entries behind, and writes at most 16 slots at
+        // once (any hit's two pushing passes).
+        let need = bvh.depth * 7 + 16;
         if stack.len() < need {
             stack.resize(need, (0, 0.0));
         }
@@ -189,7 +192,7 @@ fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> 
 
 /// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
 /// nearest hit with `tnear < t < tfar`, or with `ANY_HIT` the first. `stack` holds at least
-/// `7 depth + 8` entries.
+/// `7 depth + 16` entries.
 #[inline(always)]
 pub(super) fn walk<const ANY_HIT: bool>(
     accel: &Accel,
@@ -206,7 +209,7 @@ pub(super) fn walk<const ANY_HIT: bool>(
     loop {
         if cur & LEAF_BIT == 0 {
             let node = &bvh.nodes[cur as usize];
-            let (bits, lo) = hit_node1(node, r, tfar);
+            let (bits, lo, inside) = hit_node1(node, r, tfar);
             if bits != 0 {
                 let rest = bits & (bits - 1);
                 if rest == 0 {
@@ -239,10 +242,24 @@ pub(super) fn walk<const ANY_HIT: bool>(
                 // branches: every slot is written, the pointer moves only for hit ones),
                 // then continue with the nearest.
                 let order = node.order[r.octant];
+                // (any hit: the boxes the ray starts in are pushed before the others, so they
+                // are visited after them, see `ORIGIN_LAST`)
+                let (early, late) = if ANY_HIT && ORIGIN_LAST {
+                    (bits & inside, bits & !inside)
+                } else {
+                    (0, bits)
+                };
+                if early != 0 {
+                    for k in (0..8).rev() {
+                        let slot = (order >> (3 * k) & 7) as usize;
+                        stack[sp] = (node.child[slot], lo[slot]);
+                        sp += (early >> slot & 1) as usize;
+                    }
+                }
                 for k in (0..8).rev() {
                     let slot = (order >> (3 * k) & 7) as usize;
                     stack[sp] = (node.child[slot], lo[slot]);
-                    sp += (bits >> slot & 1) as usize;
+                    sp += (late >> slot & 1) as usize;
                 }
                 sp -= 1;
                 cur = stack[sp].0;
