@@ -145,8 +145,9 @@ pub fn hit_block1<const ANY_HIT: bool>(
 }
 
 /// One ray against a node's 8 boxes: the bits of the children met within `[tnear, tfar]`,
-/// their entry distances, and the bits of the boxes the ray starts in (entry at `tnear`). Near and far planes are picked per axis by the direction's
-/// sign, which gives exactly `min` / `max` of the two plane distances of `hit_box1`.
+/// their entry distances, and the bits of the boxes the ray starts in (entry at `tnear`).
+/// Near and far planes are picked per axis by the direction's sign, which gives exactly
+/// `min` / `max` of the two plane distances of `hit_box1`.
 #[inline(always)]
 pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f32; 8], u32) {
     let axis = |k: usize, o: F32x8, inv: F32x8| {
@@ -227,8 +228,8 @@ pub(super) fn walk<const ANY_HIT: bool>(
                     // (any hit: the box the ray starts in after the other, see
                     // `ORIGIN_LAST`)
                     let b_first = if ANY_HIT && ORIGIN_LAST {
-                        let (ia, ib) = (lo[a] <= r.tnear, lo[b] <= r.tnear);
-                        if ia != ib { ia } else { lo[b] < lo[a] }
+                        let (ia, ib) = (inside >> a & 1, inside >> b & 1);
+                        if ia != ib { ia == 1 } else { lo[b] < lo[a] }
                     } else {
                         lo[b] < lo[a]
                     };
