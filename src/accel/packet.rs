@@ -8,7 +8,7 @@ use super::hybrid8::hand_off;
 use super::scalar::{BARY_SAFE, inside_f64};
 use super::tri_soa::LeafView;
 use super::wide::NO_ENTRY;
-use super::{Accel, SLAB_FAR_SCALE, safe_inv};
+use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8, U32x8, Vec3x8};
@@ -75,22 +75,6 @@ pub fn hit_triangle8(
     }
     (hit, t, b1, b2)
 }
-
-/// Any-hit walks (shadow rays) visit a child box the ray starts in after one it does not.
-/// A shadow ray starts on a surface, so the boxes around its origin hold the triangles it
-/// leaves without hitting, and what blocks it lies farther on; near-first tested that
-/// neighbourhood before reaching the occluder. Where both boxes hold the origin, the one the
-/// ray leaves later goes first (it reaches farther); where neither does, the nearer (a
-/// blocker close to the surface, as under a body's own limbs, is found early). A packet
-/// takes the side most of its lanes prefer; `wide1` with three or more hit children pushes
-/// the boxes the ray starts in first, so they come last. An unoccluded ray visits every box
-/// it meets in any order, and any order finds an occluder when there is one, so answers do
-/// not change.
-/// Measured (README, "Engines", instructions of `occluded8`): bench shadow rays 0.85x,
-/// `refraction`'s shadow rays (from inside the glass kitten) 0.73x, `phong`'s 1.04x; visiting
-/// every farther child first measured 0.80x / 0.62x / 1.24x, so the floor scenes rendered
-/// slower with it.
-pub const ORIGIN_LAST: bool = true;
 
 /// Packet slab test: lanes of `active` whose ray meets the box within `[tnear, tfar]`, and
 /// their entry and exit distances.
@@ -221,18 +205,19 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
             match (simd::any(ml), simd::any(mr)) {
                 (true, true) => {
                     let both = ml & mr;
-                    let left_first = if ANY_HIT && ORIGIN_LAST {
-                        // per lane: the box not holding the origin, else (both hold it) the
-                        // one left later, else the nearer (see `ORIGIN_LAST`).
+                    // per lane: the nearer box first, or with any hit the box not holding
+                    // the origin, else (both hold it) the one left later (see
+                    // `ORIGIN_LAST`); the side most lanes prefer goes first.
+                    let near_l = simd::le(tl, tr);
+                    let pref = if ANY_HIT && ORIGIN_LAST {
                         let (il, ir) = (simd::le(tl, rays.tnear), simd::le(tr, rays.tnear));
-                        let both_in_or_out = simd::select(il, simd::ge(hl, hr), simd::le(tl, tr));
-                        let pref = simd::and_not(ir, il) | simd::and_not(both_in_or_out, il ^ ir);
-                        simd::bitmask(both & pref).count_ones() * 2
-                            >= simd::bitmask(both).count_ones()
+                        let same = simd::select(il, simd::ge(hl, hr), near_l);
+                        simd::and_not(ir, il) | simd::and_not(same, il ^ ir)
                     } else {
-                        simd::bitmask(both & simd::le(tl, tr)).count_ones() * 2
-                            >= simd::bitmask(both).count_ones()
+                        near_l
                     };
+                    let left_first = simd::bitmask(both & pref).count_ones() * 2
+                        >= simd::bitmask(both).count_ones();
                     let (first, later, m, ml_later) = if left_first {
                         (l, r, ml, mr)
                     } else {

@@ -6,10 +6,9 @@
 //! return: the per-triangle arithmetic is the same, the boxes are the same padded boxes, and
 //! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
 
-use super::packet::ORIGIN_LAST;
 use super::scalar::{BARY_SAFE, inside_f64};
 use super::wide::{Bvh8, LEAF_BIT, TriBlock8, leaf_blocks};
-use super::{Accel, SLAB_FAR_SCALE, safe_inv};
+use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::{Hit, Ray};
 use crate::simd::{self, F32x8, M32x8, Vec3x8};
@@ -149,7 +148,7 @@ pub fn hit_block1<const ANY_HIT: bool>(
 /// Near and far planes are picked per axis by the direction's sign, which gives exactly
 /// `min` / `max` of the two plane distances of `hit_box1`.
 #[inline(always)]
-pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f32; 8], u32) {
+pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> NodeHits {
     let axis = |k: usize, o: F32x8, inv: F32x8| {
         // (`& 1`: the index is 0 or 1, which the compiler then knows.)
         let near = node.bounds[r.near[k] & 1][k];
@@ -164,7 +163,27 @@ pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> (u32, [f3
     let hit = simd::bitmask(simd::le(lo, hi * simd::splat(SLAB_FAR_SCALE))) & node.valid();
     // (the children whose box the ray starts in: entered no later than tnear)
     let inside = simd::bitmask(simd::le(lo, simd::splat(r.tnear)));
-    (hit, simd::lanes(lo), inside)
+    NodeHits {
+        bits: hit,
+        lo: simd::lanes(lo),
+        inside,
+    }
+}
+
+/// What [`hit_node1`] finds at a node (lanes = child slots).
+pub struct NodeHits {
+    /// The children met within `[tnear, tfar]`.
+    pub bits: u32,
+    /// Entry distances.
+    pub lo: [f32; 8],
+    /// The children whose box the ray starts in (entered no later than `tnear`).
+    pub inside: u32,
+}
+
+/// Traversal stack entries a walk of `bvh` needs: each node level leaves at most 7 entries
+/// behind, and a node writes at most 16 slots at once (any hit's two pushing passes).
+pub(super) fn stack_need(bvh: &Bvh8) -> usize {
+    bvh.depth * 7 + 16
 }
 
 thread_local! {
@@ -181,9 +200,7 @@ fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> 
         return None;
     }
     STACK.with_borrow_mut(|stack| {
-        // each node level leaves at most 7 entries behind, and writes at most 16 slots at
-        // once (any hit's two pushing passes).
-        let need = bvh.depth * 7 + 16;
+        let need = stack_need(bvh);
         if stack.len() < need {
             stack.resize(need, (0, 0.0));
         }
@@ -193,7 +210,7 @@ fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> 
 
 /// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
 /// nearest hit with `tnear < t < tfar`, or with `ANY_HIT` the first. `stack` holds at least
-/// `7 depth + 16` entries.
+/// [`stack_need`] entries.
 #[inline(always)]
 pub(super) fn walk<const ANY_HIT: bool>(
     accel: &Accel,
@@ -210,7 +227,7 @@ pub(super) fn walk<const ANY_HIT: bool>(
     loop {
         if cur & LEAF_BIT == 0 {
             let node = &bvh.nodes[cur as usize];
-            let (bits, lo, inside) = hit_node1(node, r, tfar);
+            let NodeHits { bits, lo, inside } = hit_node1(node, r, tfar);
             if bits != 0 {
                 let rest = bits & (bits - 1);
                 if rest == 0 {
@@ -250,6 +267,8 @@ pub(super) fn walk<const ANY_HIT: bool>(
                 } else {
                     (0, bits)
                 };
+                // (the loop is written twice: as one closure called twice it cost 3% more
+                // instructions on shadow and incoherent rays)
                 if early != 0 {
                     for k in (0..8).rev() {
                         let slot = (order >> (3 * k) & 7) as usize;
