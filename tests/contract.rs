@@ -381,3 +381,51 @@ fn shade8_lanes_equal_the_scalar_shading_bit_for_bit() {
     }
     assert!(lanes_checked > 10_000, "{lanes_checked} lanes checked");
 }
+
+/// A light whose share at a hit is exactly 0 in every channel (`kd = 0` where the Phong lobe
+/// rounds to 0) gets no shadow ray, in every engine, and the image is what it would be with
+/// the ray traced: with `kd = ks = 0` no light can add anything, so no shadow ray is traced
+/// and the image equals, bit for bit, the scene's image without its lights. On `refraction`
+/// (`kd = 0`, `n = 200`) the lobe skips most rays: fewer shadow rays than with a diffuse share
+/// too small to see.
+#[test]
+fn lights_that_add_nothing_get_no_shadow_rays() {
+    use std::sync::atomic::Ordering::Relaxed;
+    use whitted::render::Engine;
+    let bits = |i: &Image| {
+        i.pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    let mut dark = world("phong", 40, 30);
+    for m in &mut dark.scene.materials {
+        (m.kd, m.ks) = (Vec3::ZERO, Vec3::ZERO);
+    }
+    let mut unlit = world("phong", 40, 30);
+    unlit.scene.materials = dark.scene.materials.clone();
+    unlit.scene.lights.clear();
+    let shadow_rays = |w: &World, engine| {
+        let mut s = settings(None);
+        s.engine = engine;
+        let (img, stats) = render(w, &s, &|_| {});
+        (img, stats.rays.shadow.load(Relaxed))
+    };
+    for engine in [Engine::Scalar, Engine::Packet, Engine::Auto] {
+        let (img, n) = shadow_rays(&dark, engine);
+        assert_eq!(n, 0, "{engine:?}");
+        assert!(
+            bits(&img) == bits(&shadow_rays(&unlit, engine).0),
+            "{engine:?}"
+        );
+    }
+    let glass = world("refraction", 40, 30);
+    let mut faint = world("refraction", 40, 30);
+    for m in &mut faint.scene.materials {
+        m.kd = Vec3::splat(1e-30);
+    }
+    for engine in [Engine::Scalar, Engine::Auto] {
+        let (few, all) = (shadow_rays(&glass, engine).1, shadow_rays(&faint, engine).1);
+        assert!(0 < few && 2 * few < all, "{engine:?}: {few} of {all}");
+    }
+}

@@ -169,10 +169,6 @@ pub fn direct1(
         if !(ndotl > 0.0) {
             continue;
         }
-        // shadow
-        if terms.shadows && !visible(i) {
-            continue;
-        }
         // diffuse
         let mut c = m.kd * s.od * ndotl;
         // specular: r = 2 <N, l> N - l
@@ -180,7 +176,17 @@ pub fn direct1(
             let r = 2.0 * ndotl * s.n - l;
             c += m.ks * phong_pow(v.dot(r).max(0.0), m.n);
         }
-        color += light.intensity * c;
+        let share = light.intensity * c;
+        // A share of exactly 0 (every channel) adds nothing whether the light is visible or
+        // not, so no shadow ray is traced for it: `kd = 0` where the Phong lobe rounds to 0.
+        if share == Vec3::ZERO {
+            continue;
+        }
+        // shadow
+        if terms.shadows && !visible(i) {
+            continue;
+        }
+        color += share;
     }
     color
 }

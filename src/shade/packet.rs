@@ -171,8 +171,9 @@ pub fn shade8(
         let lp = Vec3x8::splat(light.position.to_array());
         let l = (lp - q).normalize();
         let ndotl = n.dot(l);
-        // Both terms vanish where <N, l> <= 0, so no shadow ray is needed there.
-        let lit = mask & simd::gt(ndotl, zero);
+        // Both terms vanish where <N, l> <= 0, so no shadow ray is needed there (nor where
+        // the light's share rounds to 0, below).
+        let facing = mask & simd::gt(ndotl, zero);
         // diffuse: kd Od <N, l>
         let kdod = Vec3x8::new(kd.x * od.x, kd.y * od.y, kd.z * od.z);
         let mut c = kdod.scale(ndotl);
@@ -190,6 +191,14 @@ pub fn shade8(
             c = c + ks.scale(pow);
         }
         let ip = Vec3x8::splat(light.intensity.to_array());
+        let contribution = ip.mul_elem(c);
+        // a share of exactly 0 in every channel adds nothing visible or not, so it needs no
+        // shadow ray (`direct1` skips it too): `kd = 0` where the Phong lobe rounds to 0, as
+        // on most of `refraction`'s glass. NaN is not 0 and keeps its ray.
+        let nothing = simd::eq(contribution.x, zero)
+            & simd::eq(contribution.y, zero)
+            & simd::eq(contribution.z, zero);
+        let lit = simd::and_not(facing, nothing);
         // shadow ray: origin offset along +-Ng to the light's side, tfar to the light.
         let side = simd::gt(l.dot(ng), zero);
         let origin = Vec3x8::select(side, q + ng.scale(eps), q - ng.scale(eps));
@@ -199,7 +208,7 @@ pub fn shade8(
             origin,
             dir: l,
             tfar: simd::sqrt(to_light.dot(to_light)),
-            contribution: ip.mul_elem(c),
+            contribution,
         });
     }
 
