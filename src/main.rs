@@ -574,6 +574,12 @@ fn print_stats(
     println!(
         "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
     );
+    let repeated = load(&r.repeated);
+    if repeated > 0 {
+        println!(
+            "repeated rays     {repeated} of the reflection and refraction rays are another ray bit for bit and take its hit untraced"
+        );
+    }
     if engine != whitted::trace::Engine::Scalar {
         let rays_of = [primary, primary + refl + refr, shadow, refl + refr];
         for (k, name) in whitted::render::RenderStats::PHASES.iter().enumerate() {

@@ -429,3 +429,33 @@ fn lights_that_add_nothing_get_no_shadow_rays() {
         assert!(0 < few && 2 * few < all, "{engine:?}: {few} of {all}");
     }
 }
+
+/// Total internal reflection traces `It` along `d_r` from the same origin as the reflection
+/// ray: the wavefront engines trace such a pair (and what it spawns) once. On `refraction`
+/// most secondary rays are such repeats; its image stays the one of `canonical_hashes.rs`.
+/// Scenes without refraction have none, and the scalar reference counts none.
+#[test]
+fn total_internal_reflection_pairs_are_traced_once() {
+    use std::sync::atomic::Ordering::Relaxed;
+    use whitted::render::Engine;
+    let count = |name: &str, engine| {
+        let w = world(name, 40, 30);
+        let mut s = settings(None);
+        s.engine = engine;
+        let (_, stats) = render(&w, &s, &|_| {});
+        let r = &stats.rays;
+        (
+            r.repeated.load(Relaxed),
+            r.reflection.load(Relaxed) + r.refraction.load(Relaxed),
+        )
+    };
+    for engine in [Engine::Packet, Engine::Wide, Engine::Hybrid, Engine::Auto] {
+        let (repeated, secondary) = count("refraction", engine);
+        assert!(
+            3 * repeated > secondary && repeated < secondary,
+            "{engine:?}: {repeated} of {secondary}"
+        );
+        assert_eq!(count("cubemap", engine).0, 0);
+    }
+    assert_eq!(count("refraction", Engine::Scalar).0, 0);
+}

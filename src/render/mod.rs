@@ -74,6 +74,11 @@ pub struct RayCounts {
     pub reflection: AtomicU64,
     /// Refraction rays.
     pub refraction: AtomicU64,
+    /// Reflection and refraction rays (counted above too) that repeat another ray of the
+    /// same generation bit for bit and take its hit instead of a traversal of their own
+    /// (wavefront engines: total internal reflection, where the refraction ray is the
+    /// reflection ray, and what such pairs spawn).
+    pub repeated: AtomicU64,
 }
 
 impl RayCounts {

@@ -65,7 +65,17 @@ pub struct RayQueue {
     pub weight: [Vec<f32>; 3],
     /// Remaining recursion depth of each ray.
     pub depth: Vec<u32>,
+    /// Per ray, an earlier entry holding the very same ray (origin and direction bit for
+    /// bit), whose hit it takes instead of being traced, or [`NO_TWIN`]. Total internal
+    /// reflection makes such pairs (the refraction ray is the reflection ray), and the
+    /// rays a twin spawns are twins of what its original spawns.
+    pub twin: Vec<u32>,
+    /// Entries with a twin.
+    pub twins: usize,
 }
+
+/// `RayQueue::twin` of a ray that is traced itself.
+pub const NO_TWIN: u32 = u32::MAX;
 
 impl RayQueue {
     /// Append one ray.
@@ -77,9 +87,11 @@ impl RayQueue {
         }
         self.pixel.push(pixel);
         self.depth.push(depth);
+        self.twin.push(NO_TWIN);
     }
 
-    /// Append the lanes of `bits`, densely (the repacking step).
+    /// Append the lanes of `bits`, densely (the repacking step): one argument per field.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn push_lanes(
         &mut self,
@@ -89,6 +101,7 @@ impl RayQueue {
         pixel: [u32; LANES],
         weight: &Vec3x8,
         depth: [u32; LANES],
+        twin: [u32; LANES],
     ) {
         let lanes = LaneList::new(bits);
         if lanes.is_empty() {
@@ -99,6 +112,10 @@ impl RayQueue {
         lanes.extend3(&mut self.weight, weight);
         lanes.extend(&mut self.pixel, pixel);
         lanes.extend(&mut self.depth, depth);
+        lanes.extend(&mut self.twin, twin);
+        self.twins += (0..LANES)
+            .filter(|&i| bits >> i & 1 == 1 && twin[i] != NO_TWIN)
+            .count();
     }
 
     /// Pixels of entries `start .. start + 8` (0 past the end).
@@ -136,6 +153,8 @@ impl RayQueue {
         }
         self.pixel.clear();
         self.depth.clear();
+        self.twin.clear();
+        self.twins = 0;
     }
 
     /// Entry `i` as a ray (`tnear = 0`, `tfar = inf`).
@@ -169,7 +188,12 @@ impl RayQueue {
         let len = self.len();
         let n = len.max(1) as f32;
         let mean: [f32; 3] = std::array::from_fn(|k| self.o[k].iter().sum::<f32>() / n);
-        let BinScratch { keys, perm, spare } = scratch;
+        let BinScratch {
+            keys,
+            perm,
+            spare,
+            at,
+        } = scratch;
         keys.clear();
         keys.extend((0..len).map(|i| {
             let dir = (0..3).fold(0u8, |b, k| b | ((self.d[k][i] < 0.0) as u8) << k);
@@ -202,6 +226,26 @@ impl RayQueue {
         }
         gather(&mut spare.pixel, &self.pixel, perm);
         gather(&mut spare.depth, &self.depth, perm);
+        // twins move with their entries: a twin and its original have the same key, so the
+        // stable sort keeps the original first
+        spare.twin.clear();
+        spare.twins = self.twins;
+        if self.twins == 0 {
+            spare.twin.resize(len, NO_TWIN);
+        } else {
+            // where each entry went (the inverse permutation)
+            at.clear();
+            at.resize(len, 0);
+            for (j, &i) in perm.iter().enumerate() {
+                at[i as usize] = j as u32;
+            }
+            spare
+                .twin
+                .extend(perm.iter().map(|&i| match self.twin[i as usize] {
+                    NO_TWIN => NO_TWIN,
+                    t => at[t as usize],
+                }));
+        }
         std::mem::swap(self, spare);
     }
 }
@@ -212,6 +256,7 @@ pub struct BinScratch {
     keys: Vec<u8>,
     perm: Vec<u32>,
     spare: RayQueue,
+    at: Vec<u32>,
 }
 
 /// Shadow rays waiting for an any-hit query, each with the RGB contribution its pixel gets
@@ -331,5 +376,49 @@ mod tests {
         }
         q.bin_by_direction_and_origin(&mut BinScratch::default());
         assert_eq!(q.pixel, vec![0, 2, 1, 3]);
+    }
+
+    #[test]
+    fn binning_keeps_each_twin_on_its_original() {
+        // entries 0..6 with directions of three octants; 3 repeats 0, 4 repeats 1 and 5
+        // repeats 3 (a twin of a twin)
+        let dirs = [[1.0, 1.0, 1.0], [-1.0, 1.0, 1.0], [1.0, -1.0, 1.0]];
+        let mut q = RayQueue::default();
+        let twins = [NO_TWIN, NO_TWIN, NO_TWIN, 0, 1, 3];
+        for (k, &t) in twins.iter().enumerate() {
+            let d = Vec3::from(
+                dirs[if t == NO_TWIN {
+                    k
+                } else {
+                    [0, 1, 0, 0][t as usize]
+                }],
+            );
+            let mut one = [NO_TWIN; LANES];
+            one[0] = t;
+            q.push_lanes(
+                1,
+                &Vec3x8::splat([0.0; 3]),
+                &Vec3x8::splat(d.to_array()),
+                [k as u32; LANES],
+                &Vec3x8::splat([1.0; 3]),
+                [1; LANES],
+                one,
+            );
+        }
+        assert_eq!(q.twins, 3);
+        q.bin_by_direction_and_origin(&mut BinScratch::default());
+        assert_eq!(q.twins, 3);
+        for j in 0..q.len() {
+            let t = q.twin[j];
+            if t != NO_TWIN {
+                assert!((t as usize) < j, "an original comes first");
+                assert_eq!(q.ray(t as usize).dir, q.ray(j).dir);
+                let original = twins[q.pixel[j] as usize];
+                assert_eq!(q.pixel[t as usize], original);
+            }
+        }
+        // octant 0 (pixels 0, 3, 5), then -x (1, 4), then -y (2): every twin moved
+        assert_eq!(q.pixel, vec![0, 3, 5, 1, 4, 2]);
+        assert_eq!(&q.twin[1..5], &[0, 1, NO_TWIN, 3]);
     }
 }

@@ -7,7 +7,7 @@
 //! Queues are SoA and tile-local (kept in one `Workspace` per worker thread and reused from
 //! tile to tile), so memory does not grow with the image size.
 
-use super::queues::{BinScratch, RayQueue, ShadowQueue};
+use super::queues::{BinScratch, NO_TWIN, RayQueue, ShadowQueue};
 use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{
     Accel, intersect_hybrid8, intersect_wide8, intersect8, occluded_hybrid8, occluded_wide8,
@@ -118,6 +118,10 @@ pub struct Workspace {
     shadows: ShadowQueue,
     binning: BinScratch,
     hits: Vec<HitPacket8>,
+    /// Entries of `rays` traced themselves (not twins), when some are twins.
+    unique: Vec<u32>,
+    /// Per entry of `rays`, the `next` entries of its reflection and refraction rays.
+    children: Vec<[u32; 2]>,
     shade: Shade8,
     /// Reflection and refraction rays spawned so far per pixel of the tile (the budget).
     tree: Vec<u32>,
@@ -146,6 +150,8 @@ pub fn render_tile(
         shadows,
         binning,
         hits,
+        unique,
+        children,
         shade,
         tree,
         accum,
@@ -159,7 +165,7 @@ pub fn render_tile(
     rays.clear();
     next.clear();
     shadows.clear();
-    let mut counts = [0u64; 4];
+    let mut counts = [0u64; 5];
     let mut phase_ns = [0u64; 4];
 
     generate_camera_rays(&camera, offsets, (x0, y0, x1, y1), depth, rays);
@@ -172,7 +178,8 @@ pub fn render_tile(
         } else {
             kernels.secondary
         };
-        intersect_closest(world, kernel, rays, hits);
+        intersect_closest(world, kernel, rays, hits, unique);
+        counts[4] += rays.twins as u64;
         phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
 
         let start = Instant::now();
@@ -184,7 +191,7 @@ pub fn render_tile(
             hits,
             accum,
             shadows,
-            next,
+            (next, children),
             &mut counts,
             shade,
             (tree, budget),
@@ -216,9 +223,15 @@ pub fn render_tile(
     }
 
     let r = &stats.rays;
-    for (a, c) in [&r.primary, &r.shadow, &r.reflection, &r.refraction]
-        .into_iter()
-        .zip(counts)
+    for (a, c) in [
+        &r.primary,
+        &r.shadow,
+        &r.reflection,
+        &r.refraction,
+        &r.repeated,
+    ]
+    .into_iter()
+    .zip(counts)
     {
         a.fetch_add(c, Ordering::Relaxed);
     }
@@ -264,19 +277,52 @@ fn generate_camera_rays(
                     pixels,
                     &weight,
                     [depth; LANES],
+                    [NO_TWIN; LANES],
                 );
             }
         }
     }
 }
 
-/// Closest hits of every queued ray, 8 consecutive entries per packet.
-fn intersect_closest(world: &World, kernel: Kernel, rays: &RayQueue, out: &mut Vec<HitPacket8>) {
+/// Closest hits of every queued ray, 8 consecutive entries per packet; a twin takes its
+/// original's hit (the same ray has the same hit: every kernel's result depends on the ray
+/// alone), and the other rays are packed 8 at a time without the twins.
+fn intersect_closest(
+    world: &World,
+    kernel: Kernel,
+    rays: &RayQueue,
+    out: &mut Vec<HitPacket8>,
+    unique: &mut Vec<u32>,
+) {
+    let cull = world.scene.cull_backfaces;
     out.clear();
-    out.extend((0..rays.len()).step_by(LANES).map(|start| {
-        let (packet, active) = rays.packet(start);
-        kernel.intersect(&world.accel, &packet, active, world.scene.cull_backfaces)
-    }));
+    if rays.twins == 0 {
+        out.extend((0..rays.len()).step_by(LANES).map(|start| {
+            let (packet, active) = rays.packet(start);
+            kernel.intersect(&world.accel, &packet, active, cull)
+        }));
+        return;
+    }
+    out.resize(rays.len().div_ceil(LANES), HitPacket8::none());
+    unique.clear();
+    unique.extend((0..rays.len() as u32).filter(|&j| rays.twin[j as usize] == NO_TWIN));
+    let at = |j: u32| (j as usize / LANES, j as usize % LANES);
+    for group in unique.chunks(LANES) {
+        let (packet, active) = RayPacket8::from_fn(|i| group.get(i).map(|&j| rays.ray(j as usize)));
+        let h = kernel.intersect(&world.accel, &packet, active, cull);
+        for (i, &j) in group.iter().enumerate() {
+            let (p, lane) = at(j);
+            out[p].set_lane(lane, h.lane(i));
+        }
+    }
+    // (an original comes before its twins, and may be a twin itself)
+    for (j, &t) in rays.twin.iter().enumerate() {
+        if t != NO_TWIN {
+            let (p, lane) = at(t);
+            let h = out[p].lane(lane);
+            out[j / LANES].set_lane(j % LANES, h);
+        }
+    }
 }
 
 /// Rays that hit nothing take the background, times their weight.
@@ -304,11 +350,13 @@ fn shade_hits(
     hits: &[HitPacket8],
     accum: &mut [Vec3],
     shadows: &mut ShadowQueue,
-    next: &mut RayQueue,
-    counts: &mut [u64; 4],
+    (next, children): (&mut RayQueue, &mut Vec<[u32; 2]>),
+    counts: &mut [u64; 5],
     shaded: &mut Shade8,
     (tree, budget): (&mut [u32], u32),
 ) -> Option<u32> {
+    children.clear();
+    children.resize(rays.len(), [NO_TWIN; 2]);
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
         let mask = h.hit_mask();
@@ -347,6 +395,20 @@ fn shade_hits(
                 *t += 1;
             }
             counts[kind] += b.count_ones() as u64;
+            // twins: what a twin spawns is the twin of what its original spawned (the same
+            // ray, hit and depth spawn the same rays), and a mirror refraction ray is the
+            // twin of the reflection ray its hit spawned just before
+            let mirror = simd::bitmask(sec.mirror);
+            let mut twin = [NO_TWIN; LANES];
+            for (k, i) in (0..LANES).filter(|&i| b >> i & 1 == 1).enumerate() {
+                let j = start + i;
+                twin[i] = match rays.twin[j] {
+                    NO_TWIN if mirror >> i & 1 == 1 => children[j][0],
+                    NO_TWIN => NO_TWIN,
+                    t => children[t as usize][kind - 2],
+                };
+                children[j][kind - 2] = (next.len() + k) as u32;
+            }
             next.push_lanes(
                 b,
                 &sec.origin,
@@ -354,6 +416,7 @@ fn shade_hits(
                 pixel,
                 &w.mul_elem(sec.weight),
                 depth,
+                twin,
             );
         }
     }

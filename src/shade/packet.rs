@@ -40,6 +40,10 @@ pub struct SecondaryLanes {
     pub dir: Vec3x8,
     /// `ks` or `kt` (RGB): the weight the ray's colour is added with.
     pub weight: Vec3x8,
+    /// Refraction only: the lanes whose ray is, bit for bit, the reflection ray of the same
+    /// lane (total internal reflection traces `It` along `d_r`, from the same offset origin,
+    /// where a reflection ray is spawned too).
+    pub mirror: M32x8,
 }
 
 /// What shading a hit packet produces (reused across packets to avoid allocating).
@@ -227,6 +231,7 @@ pub fn shade8(
         origin: offset(dr),
         dir: dr,
         weight: kr,
+        mirror: simd::splat(0.0),
     };
     // refraction: eta = 1/ior entering through a front face, ior leaving through a back
     // face; N turned against d; total internal reflection (k < 0) takes d_r.
@@ -237,12 +242,14 @@ pub fn shade8(
         let cosi = -d.dot(nt);
         let k = one - eta * eta * (one - cosi * cosi);
         let t = (d.scale(eta) + nt.scale(eta * cosi - simd::sqrt(k))).normalize();
-        let dt = Vec3x8::select(simd::lt(k, zero), dr, t);
+        let tir = simd::lt(k, zero);
+        let dt = Vec3x8::select(tir, dr, t);
         SecondaryLanes {
             mask: refr,
             origin: offset(dt),
             dir: dt,
             weight: kt,
+            mirror: refr & tir & out.reflection.mask,
         }
     } else {
         SecondaryLanes::default()
