@@ -574,10 +574,10 @@ fn print_stats(
     println!(
         "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
     );
-    let repeated = load(&r.repeated);
+    let (repeated, repeated_shadow) = (load(&r.repeated), load(&r.repeated_shadow));
     if repeated > 0 {
         println!(
-            "repeated rays     {repeated} of the reflection and refraction rays are another ray bit for bit and take its hit untraced"
+            "repeated rays     {repeated} reflection and refraction, {repeated_shadow} shadow: each is another ray bit for bit and takes its answer untraced"
         );
     }
     if engine != whitted::trace::Engine::Scalar {

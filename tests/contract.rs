@@ -431,7 +431,8 @@ fn lights_that_add_nothing_get_no_shadow_rays() {
 }
 
 /// Total internal reflection traces `It` along `d_r` from the same origin as the reflection
-/// ray: the wavefront engines trace such a pair (and what it spawns) once. On `refraction`
+/// ray: the wavefront engines trace such a pair (what it spawns, and the shadow rays of its
+/// hits) once. On `refraction`
 /// most secondary rays are such repeats; its image stays the one of `canonical_hashes.rs`.
 /// Scenes without refraction have none, and the scalar reference counts none.
 #[test]
@@ -447,15 +448,24 @@ fn total_internal_reflection_pairs_are_traced_once() {
         (
             r.repeated.load(Relaxed),
             r.reflection.load(Relaxed) + r.refraction.load(Relaxed),
+            r.repeated_shadow.load(Relaxed),
+            r.shadow.load(Relaxed),
         )
     };
     for engine in [Engine::Packet, Engine::Wide, Engine::Hybrid, Engine::Auto] {
-        let (repeated, secondary) = count("refraction", engine);
+        let (repeated, secondary, repeated_shadow, shadow) = count("refraction", engine);
         assert!(
             3 * repeated > secondary && repeated < secondary,
             "{engine:?}: {repeated} of {secondary}"
         );
-        assert_eq!(count("cubemap", engine).0, 0);
+        // the shadow rays of repeated hits repeat too
+        assert!(
+            0 < repeated_shadow && repeated_shadow < shadow,
+            "{engine:?}: {repeated_shadow} of {shadow} shadow rays"
+        );
+        let (r, _, rs, _) = count("cubemap", engine);
+        assert_eq!((r, rs), (0, 0));
     }
-    assert_eq!(count("refraction", Engine::Scalar).0, 0);
+    let (r, _, rs, _) = count("refraction", Engine::Scalar);
+    assert_eq!((r, rs), (0, 0));
 }

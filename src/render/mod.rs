@@ -79,6 +79,9 @@ pub struct RayCounts {
     /// (wavefront engines: total internal reflection, where the refraction ray is the
     /// reflection ray, and what such pairs spawn).
     pub repeated: AtomicU64,
+    /// Shadow rays (counted above too) that repeat another shadow ray bit for bit (those of
+    /// a repeated ray's hit) and take its answer instead of a traversal of their own.
+    pub repeated_shadow: AtomicU64,
 }
 
 impl RayCounts {

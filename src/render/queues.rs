@@ -273,10 +273,16 @@ pub struct ShadowQueue {
     pub pixel: Vec<u32>,
     /// What the pixel gets when the light is visible, SoA.
     pub contribution: [Vec<f32>; 3],
+    /// Per ray, an earlier entry holding the very same shadow ray, whose answer it takes
+    /// instead of being traced, or [`NO_TWIN`] (the shadow rays of a twin's hit).
+    pub twin: Vec<u32>,
+    /// Entries with a twin.
+    pub twins: usize,
 }
 
 impl ShadowQueue {
-    /// Append the lanes of `bits`, densely.
+    /// Append the lanes of `bits`, densely: one argument per field.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn push_lanes(
         &mut self,
@@ -286,6 +292,7 @@ impl ShadowQueue {
         tfar: F32x8,
         pixel: [u32; LANES],
         contribution: &Vec3x8,
+        twin: [u32; LANES],
     ) {
         let lanes = LaneList::new(bits);
         if lanes.is_empty() {
@@ -296,6 +303,10 @@ impl ShadowQueue {
         lanes.extend3(&mut self.contribution, contribution);
         lanes.extend(&mut self.tfar, simd::lanes(tfar));
         lanes.extend(&mut self.pixel, pixel);
+        lanes.extend(&mut self.twin, twin);
+        self.twins += (0..LANES)
+            .filter(|&i| bits >> i & 1 == 1 && twin[i] != NO_TWIN)
+            .count();
     }
 
     /// Shadow rays queued.
@@ -320,6 +331,14 @@ impl ShadowQueue {
         }
         self.tfar.clear();
         self.pixel.clear();
+        self.twin.clear();
+        self.twins = 0;
+    }
+
+    /// Entry `i` as a ray.
+    pub fn ray(&self, i: usize) -> Ray {
+        let v = |a: &[Vec<f32>; 3]| Vec3::new(a[0][i], a[1][i], a[2][i]);
+        Ray::new(v(&self.o), v(&self.d), 0.0, self.tfar[i])
     }
 
     /// Entries `start .. start + 8` as a packet and its active mask (missing lanes inactive).

@@ -122,6 +122,10 @@ pub struct Workspace {
     unique: Vec<u32>,
     /// Per entry of `rays`, the `next` entries of its reflection and refraction rays.
     children: Vec<[u32; 2]>,
+    /// Per entry of `rays` and light (entry-major), its shadow-queue entry.
+    shadow_of: Vec<u32>,
+    /// Per shadow-queue entry, whether it is occluded (when some are twins).
+    occluded: Vec<bool>,
     shade: Shade8,
     /// Reflection and refraction rays spawned so far per pixel of the tile (the budget).
     tree: Vec<u32>,
@@ -152,6 +156,8 @@ pub fn render_tile(
         hits,
         unique,
         children,
+        shadow_of,
+        occluded,
         shade,
         tree,
         accum,
@@ -165,7 +171,7 @@ pub fn render_tile(
     rays.clear();
     next.clear();
     shadows.clear();
-    let mut counts = [0u64; 5];
+    let mut counts = [0u64; 6];
     let mut phase_ns = [0u64; 4];
 
     generate_camera_rays(&camera, offsets, (x0, y0, x1, y1), depth, rays);
@@ -190,7 +196,7 @@ pub fn render_tile(
             rays,
             hits,
             accum,
-            shadows,
+            (shadows, shadow_of),
             (next, children),
             &mut counts,
             shade,
@@ -205,7 +211,8 @@ pub fn render_tile(
 
         let start = Instant::now();
         counts[1] += shadows.len() as u64;
-        trace_shadow_rays(world, kernels.shadow, shadows, accum);
+        counts[5] += shadows.twins as u64;
+        trace_shadow_rays(world, kernels.shadow, shadows, accum, (unique, occluded));
         shadows.clear();
         phase_ns[2] += start.elapsed().as_nanos() as u64;
 
@@ -229,6 +236,7 @@ pub fn render_tile(
         &r.reflection,
         &r.refraction,
         &r.repeated,
+        &r.repeated_shadow,
     ]
     .into_iter()
     .zip(counts)
@@ -349,14 +357,19 @@ fn shade_hits(
     rays: &RayQueue,
     hits: &[HitPacket8],
     accum: &mut [Vec3],
-    shadows: &mut ShadowQueue,
+    (shadows, shadow_of): (&mut ShadowQueue, &mut Vec<u32>),
     (next, children): (&mut RayQueue, &mut Vec<[u32; 2]>),
-    counts: &mut [u64; 5],
+    counts: &mut [u64; 6],
     shaded: &mut Shade8,
     (tree, budget): (&mut [u32], u32),
 ) -> Option<u32> {
     children.clear();
     children.resize(rays.len(), [NO_TWIN; 2]);
+    let lights = world.scene.lights.len();
+    shadow_of.clear();
+    if rays.twins > 0 {
+        shadow_of.resize(rays.len() * lights, NO_TWIN);
+    }
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
         let mask = h.hit_mask();
@@ -375,11 +388,24 @@ fn shade_hits(
         shade8(world, terms, &packet, h, mask, depth, shaded);
         let s = &*shaded;
         add_lanes(accum, bits, pixel, &w.mul_elem(s.ambient));
-        for l in &s.lights {
+        for (li, l) in s.lights.iter().enumerate() {
             let lit = simd::bitmask(l.lit);
             let c = w.mul_elem(l.contribution);
             if terms.shadows {
-                shadows.push_lanes(lit, &l.origin, &l.dir, l.tfar, pixel, &c);
+                // a twin's hit casts its original's shadow rays (the share, and so whether
+                // there is a ray, does not depend on the weight)
+                let mut twin = [NO_TWIN; LANES];
+                if rays.twins > 0 {
+                    for (k, i) in (0..LANES).filter(|&i| lit >> i & 1 == 1).enumerate() {
+                        let j = start + i;
+                        let t = rays.twin[j];
+                        if t != NO_TWIN {
+                            twin[i] = shadow_of[t as usize * lights + li];
+                        }
+                        shadow_of[j * lights + li] = (shadows.len() + k) as u32;
+                    }
+                }
+                shadows.push_lanes(lit, &l.origin, &l.dir, l.tfar, pixel, &c, twin);
             } else {
                 add_lanes(accum, lit, pixel, &c);
             }
@@ -433,7 +459,45 @@ fn add_lanes(accum: &mut [Vec3], bits: u32, pixel: [u32; LANES], v: &Vec3x8) {
 }
 
 /// Any-hit queries for the shadow queue, 8 per packet; visible lights add their contribution.
-fn trace_shadow_rays(world: &World, kernel: Kernel, shadows: &ShadowQueue, accum: &mut [Vec3]) {
+/// A twin takes its original's answer, and the other rays are packed 8 at a time without the
+/// twins; contributions are added in queue order either way.
+fn trace_shadow_rays(
+    world: &World,
+    kernel: Kernel,
+    shadows: &ShadowQueue,
+    accum: &mut [Vec3],
+    (unique, occluded): (&mut Vec<u32>, &mut Vec<bool>),
+) {
+    let cull = world.scene.cull_backfaces;
+    if shadows.twins > 0 {
+        occluded.clear();
+        occluded.resize(shadows.len(), false);
+        unique.clear();
+        unique.extend((0..shadows.len() as u32).filter(|&j| shadows.twin[j as usize] == NO_TWIN));
+        for group in unique.chunks(LANES) {
+            let (packet, active) =
+                RayPacket8::from_fn(|i| group.get(i).map(|&j| shadows.ray(j as usize)));
+            let hit = simd::bitmask(kernel.occluded(&world.accel, &packet, active, cull));
+            for (i, &j) in group.iter().enumerate() {
+                occluded[j as usize] = hit >> i & 1 == 1;
+            }
+        }
+        for j in 0..shadows.len() {
+            let t = shadows.twin[j];
+            if t != NO_TWIN {
+                occluded[j] = occluded[t as usize];
+            }
+            if !occluded[j] {
+                let c = Vec3::new(
+                    shadows.contribution[0][j],
+                    shadows.contribution[1][j],
+                    shadows.contribution[2][j],
+                );
+                accum[shadows.pixel[j] as usize] += c;
+            }
+        }
+        return;
+    }
     for start in (0..shadows.len()).step_by(LANES) {
         let (packet, active) = shadows.packet(start);
         let occluded = kernel.occluded(&world.accel, &packet, active, world.scene.cull_backfaces);
