@@ -86,6 +86,7 @@ pub enum Background {
 
 impl Background {
     /// The colour seen along `dir`.
+    #[inline]
     pub fn sample(&self, dir: Vec3) -> Vec3 {
         match self {
             Background::Color(c) => *c,

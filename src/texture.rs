@@ -49,6 +49,7 @@ impl Texture {
         Texture::new(size, size, texels)
     }
 
+    #[inline(always)]
     fn texel(&self, x: i64, y: i64, wrap: Wrap) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
         let (x, y) = match wrap {
@@ -60,6 +61,7 @@ impl Texture {
 
     /// Bilinear lookup at continuous texel coordinates (texel centres at `i + 0.5`... shifted
     /// by the caller: `x = u w - 0.5` puts texel `i`'s centre at `x = i`).
+    #[inline(always)]
     pub fn bilinear(&self, x: f32, y: f32, wrap: Wrap) -> Vec3 {
         // Non-finite coordinates (from NaN uv) would make the weights NaN: look up texel 0.
         let (x, y) = if x.is_finite() && y.is_finite() {
@@ -79,6 +81,7 @@ impl Texture {
     }
 
     /// Texture colour at `uv`: `v = 0` is the bottom row, wrap = repeat.
+    #[inline]
     pub fn sample_uv(&self, uv: Vec2) -> Vec3 {
         let x = uv.x * self.width as f32 - 0.5;
         let y = (1.0 - uv.y) * self.height as f32 - 0.5;
@@ -99,6 +102,7 @@ pub struct CubeMap {
 impl CubeMap {
     /// Face index and `(s, t)` in `[0, 1]` for a direction, by the OpenGL table: the major axis
     /// picks the face, then `s = (sc/|ma| + 1)/2`, `t = (tc/|ma| + 1)/2`.
+    #[inline(always)]
     pub fn face_st(d: Vec3) -> (usize, f32, f32) {
         let a = d.abs();
         let (face, sc, tc, ma) = if a.x >= a.y && a.x >= a.z {
@@ -122,6 +126,7 @@ impl CubeMap {
     }
 
     /// Colour seen along direction `d`: bilinear, clamp to edge, row 0 at `t = 0`.
+    #[inline(always)]
     pub fn sample(&self, d: Vec3) -> Vec3 {
         let (face, s, t) = Self::face_st(d);
         let f = &self.faces[face];

@@ -66,16 +66,66 @@ pub struct RayQueue {
     /// Remaining recursion depth of each ray.
     pub depth: Vec<u32>,
     /// Per ray, an earlier entry holding the very same ray (origin and direction bit for
-    /// bit), whose hit it takes instead of being traced, or [`NO_TWIN`]. Total internal
-    /// reflection makes such pairs (the refraction ray is the reflection ray), and the
-    /// rays a twin spawns are twins of what its original spawns.
-    pub twin: Vec<u32>,
-    /// Entries with a twin.
-    pub twins: usize,
+    /// bit), whose hit it takes instead of being traced. Total internal reflection makes
+    /// such pairs (the refraction ray is the reflection ray), and the rays a twin spawns
+    /// are twins of what its original spawns.
+    pub twins: Twins,
 }
 
-/// `RayQueue::twin` of a ray that is traced itself.
+/// The twin of a ray that is traced itself.
 pub const NO_TWIN: u32 = u32::MAX;
+
+/// Per entry of a queue, an earlier entry holding the very same ray, or [`NO_TWIN`]. Stored
+/// only once the queue has a twin: until then a push costs one branch.
+#[derive(Clone, Debug, Default)]
+pub struct Twins {
+    /// Per entry (empty while `count == 0`).
+    of: Vec<u32>,
+    count: usize,
+}
+
+impl Twins {
+    /// Entries with a twin.
+    #[inline]
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Entry `j`'s twin, or [`NO_TWIN`].
+    #[inline]
+    pub fn get(&self, j: usize) -> u32 {
+        if self.count == 0 { NO_TWIN } else { self.of[j] }
+    }
+
+    /// Record the twins of the lanes just appended after `before` entries (`None`: none).
+    #[inline(always)]
+    fn extend(&mut self, lanes: &LaneList, before: usize, twin: Option<[u32; LANES]>) {
+        match twin {
+            Some(t) => {
+                let n = lanes.idx[..lanes.len]
+                    .iter()
+                    .filter(|&&i| t[i as usize] != NO_TWIN)
+                    .count();
+                if n == 0 && self.count == 0 {
+                    return;
+                }
+                if self.count == 0 {
+                    self.of.clear();
+                    self.of.resize(before, NO_TWIN);
+                }
+                lanes.extend(&mut self.of, t);
+                self.count += n;
+            }
+            None if self.count > 0 => lanes.extend(&mut self.of, [NO_TWIN; LANES]),
+            None => {}
+        }
+    }
+
+    fn clear(&mut self) {
+        self.of.clear();
+        self.count = 0;
+    }
+}
 
 impl RayQueue {
     /// Append one ray.
@@ -87,7 +137,9 @@ impl RayQueue {
         }
         self.pixel.push(pixel);
         self.depth.push(depth);
-        self.twin.push(NO_TWIN);
+        if self.twins.count > 0 {
+            self.twins.of.push(NO_TWIN);
+        }
     }
 
     /// Append the lanes of `bits`, densely (the repacking step): one argument per field.
@@ -101,21 +153,19 @@ impl RayQueue {
         pixel: [u32; LANES],
         weight: &Vec3x8,
         depth: [u32; LANES],
-        twin: [u32; LANES],
+        twin: Option<[u32; LANES]>,
     ) {
         let lanes = LaneList::new(bits);
         if lanes.is_empty() {
             return;
         }
+        let before = self.len();
         lanes.extend3(&mut self.o, o);
         lanes.extend3(&mut self.d, d);
         lanes.extend3(&mut self.weight, weight);
         lanes.extend(&mut self.pixel, pixel);
         lanes.extend(&mut self.depth, depth);
-        lanes.extend(&mut self.twin, twin);
-        self.twins += (0..LANES)
-            .filter(|&i| bits >> i & 1 == 1 && twin[i] != NO_TWIN)
-            .count();
+        self.twins.extend(&lanes, before, twin);
     }
 
     /// Pixels of entries `start .. start + 8` (0 past the end).
@@ -153,8 +203,7 @@ impl RayQueue {
         }
         self.pixel.clear();
         self.depth.clear();
-        self.twin.clear();
-        self.twins = 0;
+        self.twins.clear();
     }
 
     /// Entry `i` as a ray (`tnear = 0`, `tfar = inf`).
@@ -228,20 +277,20 @@ impl RayQueue {
         gather(&mut spare.depth, &self.depth, perm);
         // twins move with their entries: a twin and its original have the same key, so the
         // stable sort keeps the original first
-        spare.twin.clear();
-        spare.twins = self.twins;
-        if self.twins == 0 {
-            spare.twin.resize(len, NO_TWIN);
-        } else {
+        spare.twins.clear();
+        if self.twins.count > 0 {
             // where each entry went (the inverse permutation)
             at.clear();
             at.resize(len, 0);
             for (j, &i) in perm.iter().enumerate() {
                 at[i as usize] = j as u32;
             }
+            let of = &self.twins.of;
+            spare.twins.count = self.twins.count;
             spare
-                .twin
-                .extend(perm.iter().map(|&i| match self.twin[i as usize] {
+                .twins
+                .of
+                .extend(perm.iter().map(|&i| match of[i as usize] {
                     NO_TWIN => NO_TWIN,
                     t => at[t as usize],
                 }));
@@ -274,10 +323,8 @@ pub struct ShadowQueue {
     /// What the pixel gets when the light is visible, SoA.
     pub contribution: [Vec<f32>; 3],
     /// Per ray, an earlier entry holding the very same shadow ray, whose answer it takes
-    /// instead of being traced, or [`NO_TWIN`] (the shadow rays of a twin's hit).
-    pub twin: Vec<u32>,
-    /// Entries with a twin.
-    pub twins: usize,
+    /// instead of being traced (the shadow rays of a twin's hit).
+    pub twins: Twins,
 }
 
 impl ShadowQueue {
@@ -292,21 +339,19 @@ impl ShadowQueue {
         tfar: F32x8,
         pixel: [u32; LANES],
         contribution: &Vec3x8,
-        twin: [u32; LANES],
+        twin: Option<[u32; LANES]>,
     ) {
         let lanes = LaneList::new(bits);
         if lanes.is_empty() {
             return;
         }
+        let before = self.len();
         lanes.extend3(&mut self.o, o);
         lanes.extend3(&mut self.d, d);
         lanes.extend3(&mut self.contribution, contribution);
         lanes.extend(&mut self.tfar, simd::lanes(tfar));
         lanes.extend(&mut self.pixel, pixel);
-        lanes.extend(&mut self.twin, twin);
-        self.twins += (0..LANES)
-            .filter(|&i| bits >> i & 1 == 1 && twin[i] != NO_TWIN)
-            .count();
+        self.twins.extend(&lanes, before, twin);
     }
 
     /// Shadow rays queued.
@@ -331,8 +376,7 @@ impl ShadowQueue {
         }
         self.tfar.clear();
         self.pixel.clear();
-        self.twin.clear();
-        self.twins = 0;
+        self.twins.clear();
     }
 
     /// Entry `i` as a ray.
@@ -414,6 +458,7 @@ mod tests {
             );
             let mut one = [NO_TWIN; LANES];
             one[0] = t;
+            let one = Some(one);
             q.push_lanes(
                 1,
                 &Vec3x8::splat([0.0; 3]),
@@ -424,11 +469,11 @@ mod tests {
                 one,
             );
         }
-        assert_eq!(q.twins, 3);
+        assert_eq!(q.twins.count(), 3);
         q.bin_by_direction_and_origin(&mut BinScratch::default());
-        assert_eq!(q.twins, 3);
+        assert_eq!(q.twins.count(), 3);
         for j in 0..q.len() {
-            let t = q.twin[j];
+            let t = q.twins.get(j);
             if t != NO_TWIN {
                 assert!((t as usize) < j, "an original comes first");
                 assert_eq!(q.ray(t as usize).dir, q.ray(j).dir);
@@ -438,6 +483,7 @@ mod tests {
         }
         // octant 0 (pixels 0, 3, 5), then -x (1, 4), then -y (2): every twin moved
         assert_eq!(q.pixel, vec![0, 3, 5, 1, 4, 2]);
-        assert_eq!(&q.twin[1..5], &[0, 1, NO_TWIN, 3]);
+        let twins: Vec<u32> = (1..5).map(|j| q.twins.get(j)).collect();
+        assert_eq!(twins, [0, 1, NO_TWIN, 3]);
     }
 }

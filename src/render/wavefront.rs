@@ -185,7 +185,7 @@ pub fn render_tile(
             kernels.secondary
         };
         intersect_closest(world, kernel, rays, hits, unique);
-        counts[4] += rays.twins as u64;
+        counts[4] += rays.twins.count() as u64;
         phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
 
         let start = Instant::now();
@@ -211,7 +211,7 @@ pub fn render_tile(
 
         let start = Instant::now();
         counts[1] += shadows.len() as u64;
-        counts[5] += shadows.twins as u64;
+        counts[5] += shadows.twins.count() as u64;
         trace_shadow_rays(world, kernels.shadow, shadows, accum, (unique, occluded));
         shadows.clear();
         phase_ns[2] += start.elapsed().as_nanos() as u64;
@@ -285,7 +285,7 @@ fn generate_camera_rays(
                     pixels,
                     &weight,
                     [depth; LANES],
-                    [NO_TWIN; LANES],
+                    None,
                 );
             }
         }
@@ -304,7 +304,7 @@ fn intersect_closest(
 ) {
     let cull = world.scene.cull_backfaces;
     out.clear();
-    if rays.twins == 0 {
+    if rays.twins.count() == 0 {
         out.extend((0..rays.len()).step_by(LANES).map(|start| {
             let (packet, active) = rays.packet(start);
             kernel.intersect(&world.accel, &packet, active, cull)
@@ -313,7 +313,7 @@ fn intersect_closest(
     }
     out.resize(rays.len().div_ceil(LANES), HitPacket8::none());
     unique.clear();
-    unique.extend((0..rays.len() as u32).filter(|&j| rays.twin[j as usize] == NO_TWIN));
+    unique.extend((0..rays.len() as u32).filter(|&j| rays.twins.get(j as usize) == NO_TWIN));
     let at = |j: u32| (j as usize / LANES, j as usize % LANES);
     for group in unique.chunks(LANES) {
         let (packet, active) = RayPacket8::from_fn(|i| group.get(i).map(|&j| rays.ray(j as usize)));
@@ -324,7 +324,8 @@ fn intersect_closest(
         }
     }
     // (an original comes before its twins, and may be a twin itself)
-    for (j, &t) in rays.twin.iter().enumerate() {
+    for j in 0..rays.len() {
+        let t = rays.twins.get(j);
         if t != NO_TWIN {
             let (p, lane) = at(t);
             let h = out[p].lane(lane);
@@ -363,13 +364,18 @@ fn shade_hits(
     shaded: &mut Shade8,
     (tree, budget): (&mut [u32], u32),
 ) -> Option<u32> {
-    children.clear();
-    children.resize(rays.len(), [NO_TWIN; 2]);
+    // (what twins need: per entry its children and its shadow rays, kept only when this
+    // generation has twins; a scene without refraction never has any)
+    let track = rays.twins.count() > 0;
     let lights = world.scene.lights.len();
+    children.clear();
     shadow_of.clear();
-    if rays.twins > 0 {
+    if track {
+        children.resize(rays.len(), [NO_TWIN; 2]);
         shadow_of.resize(rays.len() * lights, NO_TWIN);
     }
+    // where this packet's reflection rays went (the twins of mirror refraction rays)
+    let mut reflected = (0usize, 0u32);
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
         let mask = h.hit_mask();
@@ -394,17 +400,18 @@ fn shade_hits(
             if terms.shadows {
                 // a twin's hit casts its original's shadow rays (the share, and so whether
                 // there is a ray, does not depend on the weight)
-                let mut twin = [NO_TWIN; LANES];
-                if rays.twins > 0 {
+                let twin = track.then(|| {
+                    let mut twin = [NO_TWIN; LANES];
                     for (k, i) in (0..LANES).filter(|&i| lit >> i & 1 == 1).enumerate() {
                         let j = start + i;
-                        let t = rays.twin[j];
+                        let t = rays.twins.get(j);
                         if t != NO_TWIN {
                             twin[i] = shadow_of[t as usize * lights + li];
                         }
                         shadow_of[j * lights + li] = (shadows.len() + k) as u32;
                     }
-                }
+                    twin
+                });
                 shadows.push_lanes(lit, &l.origin, &l.dir, l.tfar, pixel, &c, twin);
             } else {
                 add_lanes(accum, lit, pixel, &c);
@@ -425,15 +432,27 @@ fn shade_hits(
             // ray, hit and depth spawn the same rays), and a mirror refraction ray is the
             // twin of the reflection ray its hit spawned just before
             let mirror = simd::bitmask(sec.mirror);
-            let mut twin = [NO_TWIN; LANES];
-            for (k, i) in (0..LANES).filter(|&i| b >> i & 1 == 1).enumerate() {
-                let j = start + i;
-                twin[i] = match rays.twin[j] {
-                    NO_TWIN if mirror >> i & 1 == 1 => children[j][0],
-                    NO_TWIN => NO_TWIN,
-                    t => children[t as usize][kind - 2],
-                };
-                children[j][kind - 2] = (next.len() + k) as u32;
+            let twin = (track || mirror != 0).then(|| {
+                let mut twin = [NO_TWIN; LANES];
+                for (k, i) in (0..LANES).filter(|&i| b >> i & 1 == 1).enumerate() {
+                    let j = start + i;
+                    twin[i] = match rays.twins.get(j) {
+                        NO_TWIN if mirror >> i & 1 == 1 => {
+                            // the reflection ray of lane i: its rank among them
+                            let (at, lanes) = reflected;
+                            (at + (lanes & ((1 << i) - 1)).count_ones() as usize) as u32
+                        }
+                        NO_TWIN => NO_TWIN,
+                        t => children[t as usize][kind - 2],
+                    };
+                    if track {
+                        children[j][kind - 2] = (next.len() + k) as u32;
+                    }
+                }
+                twin
+            });
+            if kind == 2 {
+                reflected = (next.len(), b);
             }
             next.push_lanes(
                 b,
@@ -469,11 +488,13 @@ fn trace_shadow_rays(
     (unique, occluded): (&mut Vec<u32>, &mut Vec<bool>),
 ) {
     let cull = world.scene.cull_backfaces;
-    if shadows.twins > 0 {
+    if shadows.twins.count() > 0 {
         occluded.clear();
         occluded.resize(shadows.len(), false);
         unique.clear();
-        unique.extend((0..shadows.len() as u32).filter(|&j| shadows.twin[j as usize] == NO_TWIN));
+        unique.extend(
+            (0..shadows.len() as u32).filter(|&j| shadows.twins.get(j as usize) == NO_TWIN),
+        );
         for group in unique.chunks(LANES) {
             let (packet, active) =
                 RayPacket8::from_fn(|i| group.get(i).map(|&j| shadows.ray(j as usize)));
@@ -483,7 +504,7 @@ fn trace_shadow_rays(
             }
         }
         for j in 0..shadows.len() {
-            let t = shadows.twin[j];
+            let t = shadows.twins.get(j);
             if t != NO_TWIN {
                 occluded[j] = occluded[t as usize];
             }
