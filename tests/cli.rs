@@ -34,6 +34,28 @@ fn renders_the_demo_without_any_files() {
     assert_eq!((img.width(), img.height()), (64, 48));
 }
 
+/// The tree does not depend on the environment: a build once read a leftover tuning
+/// variable `LEAF` and panicked on `LEAF=abc` (and `LEAF=4` changed the tree silently).
+#[test]
+fn unrelated_environment_variables_change_nothing() {
+    let (a, b) = (tmp("env_a.exr"), tmp("env_b.exr"));
+    for (out, leaf) in [(&a, None), (&b, Some("abc"))] {
+        let mut cmd = whitted();
+        cmd.args([
+            "render", "phong", "--width", "32", "--height", "24", "-q", "-o",
+        ])
+        .arg(out);
+        if let Some(v) = leaf {
+            cmd.env("LEAF", v);
+        } else {
+            cmd.env_remove("LEAF");
+        }
+        let r = cmd.output().unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
 #[test]
 fn both_engines_and_exr_output() {
     for engine in ["auto", "packet", "wide", "hybrid", "scalar"] {

@@ -289,9 +289,7 @@ impl Bvh8 {
 }
 
 fn is_leaf(accel: &Accel, counts: &[u32], b: usize) -> bool {
-    static L: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    let l = *L.get_or_init(|| std::env::var("LEAF").map_or(BLOCK, |v| v.parse().unwrap()));
-    accel.nodes[b].count > 0 || counts[b] as usize <= l
+    accel.nodes[b].count > 0 || counts[b] as usize <= BLOCK
 }
 
 /// Half the surface area of a node's box (the SAH weight; the factor 2 does not matter).
