@@ -120,9 +120,10 @@ pub struct Workspace {
     hits: Vec<HitPacket8>,
     /// Entries of `rays` traced themselves (not twins), when some are twins.
     unique: Vec<u32>,
-    /// Per entry of `rays`, the `next` entries of its reflection and refraction rays.
+    /// Per entry of `rays`, the `next` entries of its reflection and refraction rays (kept
+    /// only while the generation has twins).
     children: Vec<[u32; 2]>,
-    /// Per entry of `rays` and light (entry-major), its shadow-queue entry.
+    /// Per entry of `rays` and light (entry-major), its shadow-queue entry (likewise).
     shadow_of: Vec<u32>,
     /// Per shadow-queue entry, whether it is occluded (when some are twins).
     occluded: Vec<bool>,
