@@ -121,6 +121,12 @@ impl Twins {
         }
     }
 
+    /// The entries of a queue of `len` that are traced themselves (no twin), into `out`.
+    pub fn originals(&self, len: usize, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend((0..len as u32).filter(|&j| self.get(j as usize) == NO_TWIN));
+    }
+
     fn clear(&mut self) {
         self.of.clear();
         self.count = 0;
@@ -383,6 +389,13 @@ impl ShadowQueue {
     pub fn ray(&self, i: usize) -> Ray {
         let v = |a: &[Vec<f32>; 3]| Vec3::new(a[0][i], a[1][i], a[2][i]);
         Ray::new(v(&self.o), v(&self.d), 0.0, self.tfar[i])
+    }
+
+    /// What entry `i`'s pixel gets when its light is visible.
+    #[inline]
+    pub fn contribution(&self, i: usize) -> Vec3 {
+        let c = &self.contribution;
+        Vec3::new(c[0][i], c[1][i], c[2][i])
     }
 
     /// Entries `start .. start + 8` as a packet and its active mask (missing lanes inactive).

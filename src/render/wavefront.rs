@@ -313,8 +313,7 @@ fn intersect_closest(
         return;
     }
     out.resize(rays.len().div_ceil(LANES), HitPacket8::none());
-    unique.clear();
-    unique.extend((0..rays.len() as u32).filter(|&j| rays.twins.get(j as usize) == NO_TWIN));
+    rays.twins.originals(rays.len(), unique);
     let at = |j: u32| (j as usize / LANES, j as usize % LANES);
     for group in unique.chunks(LANES) {
         let (packet, active) = RayPacket8::from_fn(|i| group.get(i).map(|&j| rays.ray(j as usize)));
@@ -492,10 +491,7 @@ fn trace_shadow_rays(
     if shadows.twins.count() > 0 {
         occluded.clear();
         occluded.resize(shadows.len(), false);
-        unique.clear();
-        unique.extend(
-            (0..shadows.len() as u32).filter(|&j| shadows.twins.get(j as usize) == NO_TWIN),
-        );
+        shadows.twins.originals(shadows.len(), unique);
         for group in unique.chunks(LANES) {
             let (packet, active) =
                 RayPacket8::from_fn(|i| group.get(i).map(|&j| shadows.ray(j as usize)));
@@ -510,28 +506,18 @@ fn trace_shadow_rays(
                 occluded[j] = occluded[t as usize];
             }
             if !occluded[j] {
-                let c = Vec3::new(
-                    shadows.contribution[0][j],
-                    shadows.contribution[1][j],
-                    shadows.contribution[2][j],
-                );
-                accum[shadows.pixel[j] as usize] += c;
+                accum[shadows.pixel[j] as usize] += shadows.contribution(j);
             }
         }
         return;
     }
     for start in (0..shadows.len()).step_by(LANES) {
         let (packet, active) = shadows.packet(start);
-        let occluded = kernel.occluded(&world.accel, &packet, active, world.scene.cull_backfaces);
+        let occluded = kernel.occluded(&world.accel, &packet, active, cull);
         let visible = simd::bitmask(active) & !simd::bitmask(occluded);
         for i in (0..LANES).filter(|&i| visible >> i & 1 == 1) {
             let j = start + i;
-            let c = Vec3::new(
-                shadows.contribution[0][j],
-                shadows.contribution[1][j],
-                shadows.contribution[2][j],
-            );
-            accum[shadows.pixel[j] as usize] += c;
+            accum[shadows.pixel[j] as usize] += shadows.contribution(j);
         }
     }
 }
