@@ -57,10 +57,22 @@ pub fn cpu_seconds(all: bool) -> Option<f64> {
 }
 
 /// Time `f` after one untimed warm-up call: `reps` timed calls.
-pub fn time_reps(reps: usize, threads: usize, mut f: impl FnMut()) -> Timing {
+pub fn time_reps(reps: usize, threads: usize, f: impl FnMut()) -> Timing {
+    time_reps_after(reps, threads, || {}, f)
+}
+
+/// [`time_reps`] with `before` called, untimed, before each call of `f`.
+pub fn time_reps_after(
+    reps: usize,
+    threads: usize,
+    mut before: impl FnMut(),
+    mut f: impl FnMut(),
+) -> Timing {
+    before();
     f();
     let (mut wall, mut cpu) = (vec![], vec![]);
     for _ in 0..reps.max(1) {
+        before();
         let c0 = cpu_seconds(threads > 1);
         let t0 = Instant::now();
         f();
@@ -117,22 +129,27 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
 
 /// BVH build time over `tris` with `quality`, best and median of `reps` builds after a
 /// warm-up, on a pool of `threads` (whitted's builder splits large subtrees across them; the
-/// obvhs presets build on one).
+/// obvhs presets build on one). Each build starts with the previous one freed, untimed, as the
+/// peer releases its previous scene before each timed commit (timing the drop of the old tree
+/// with the new build, as before, added its unmapping to whitted's figure).
 pub fn time_build(
     tris: &[[Vec3; 3]],
     reps: usize,
     quality: BuildQuality,
     threads: usize,
 ) -> (Accel, Timing) {
-    let mut accel = Accel::default();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
         .expect("thread pool");
-    let t = pool.install(|| {
-        time_reps(reps, threads, || {
-            accel = Accel::build(tris, quality);
-        })
-    });
-    (accel, t)
+    pool.install(|| {
+        let accel = std::cell::RefCell::new(Accel::default());
+        let t = time_reps_after(
+            reps,
+            threads,
+            || drop(accel.take()),
+            || *accel.borrow_mut() = Accel::build(tris, quality),
+        );
+        (accel.into_inner(), t)
+    })
 }
