@@ -14,7 +14,8 @@
 //! Below the front door: [`io::scene_file`] parses and validates scene files (and returns
 //! the loaders' warnings), [`render::World`] holds a scene with its BVH, [`render::render`]
 //! renders with progress and statistics, [`trace`] traces ray files against a mesh.
-#![forbid(unsafe_code)]
+// No unsafe code but one system call (`accel::pages`, huge-page advice), allowed there alone.
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -4,6 +4,7 @@
 pub mod build;
 pub mod hybrid8;
 pub mod packet;
+pub mod pages;
 pub mod scalar;
 pub mod tri_soa;
 pub mod wide;

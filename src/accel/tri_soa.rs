@@ -37,7 +37,12 @@ impl TriangleSoa {
     /// zero-area triangles are never hit.
     pub fn new(tris: &[[Vec3; 3]], order: &[u32]) -> Self {
         let len = order.len();
-        let col = || vec![0f32; len];
+        // (zeroed pages, untouched until the fill: advised first, they come huge)
+        let col = || {
+            let c = vec![0f32; len];
+            super::pages::advise_huge(&c);
+            c
+        };
         let cols = || [col(), col(), col()];
         let mut s = TriangleSoa {
             v0: cols(),

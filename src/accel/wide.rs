@@ -118,6 +118,8 @@ impl Bvh8 {
         out.nodes.reserve(accel.nodes.len() / 4 + 1);
         out.blocks.reserve(accel.tris.len() / 4 + 1);
         out.ids.reserve(accel.tris.len() / 4 + 1);
+        super::pages::advise_huge(&out.nodes);
+        super::pages::advise_huge(&out.blocks);
         let root = &accel.nodes[0];
         if counts[0] as usize <= BLOCK || root.count > 0 {
             // The whole scene is one leaf: a root node with a single child.

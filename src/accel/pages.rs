@@ -1,0 +1,87 @@
+//! Transparent huge pages for the large arrays traversal reads (`madvise(MADV_HUGEPAGE)`).
+//!
+//! A walk of a big mesh touches nodes and triangles scattered over a hundred megabytes or
+//! more; on 4 KiB pages nearly every visit also misses the TLB. Where the kernel hands out
+//! huge pages only on request (`/sys/kernel/mm/transparent_hugepage/enabled` = `madvise`, a
+//! common default), asking for them on these arrays measured (kitten subdivided 3 times,
+//! 1.3M triangles, the system switch set to `always` against `madvise`, two alternating
+//! runs each): BVH build 0.90x the time, packet8 / wide1 traversal 1.01-1.09x as fast. Where
+//! huge pages are `always` or `never` this changes nothing; elsewhere than Linux it does
+//! nothing.
+//!
+//! This is the crate's one `unsafe` block, kept to the system call.
+
+/// Arrays smaller than this stay on small pages (a huge page is 2 MiB).
+const MIN_BYTES: usize = 4 << 20;
+
+/// Ask for huge pages under `v`'s allocation (its capacity, not just its length), before it
+/// is filled: pages first touched afterwards come as huge pages where the kernel has them. A
+/// hint only: contents and behaviour are unchanged, and a refusal is ignored.
+pub fn advise_huge<T>(v: &Vec<T>) {
+    #[cfg(target_os = "linux")]
+    {
+        let bytes = v.capacity() * size_of::<T>();
+        if bytes < MIN_BYTES {
+            return;
+        }
+        const PAGE: usize = 4096;
+        let start = (v.as_ptr() as usize).next_multiple_of(PAGE);
+        let end = (v.as_ptr() as usize + bytes) & !(PAGE - 1);
+        if end > start {
+            #[allow(unsafe_code)]
+            // SAFETY: the range [start, end) lies inside `v`'s live allocation (page-aligned
+            // inward), and MADV_HUGEPAGE only changes how the kernel backs those pages: it
+            // neither frees, moves nor alters their contents, so no reference into `v` is
+            // invalidated. The return value is a hint's refusal and is ignored.
+            unsafe {
+                libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = v;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Contents survive the advice, small arrays are left alone, and where the kernel offers
+    /// huge pages on request, a large advised array is backed by them once touched.
+    #[test]
+    fn advised_arrays_keep_their_contents_and_get_huge_pages() {
+        let small: Vec<u32> = (0..1000).collect();
+        advise_huge(&small);
+        assert!(small.iter().enumerate().all(|(i, &v)| v as usize == i));
+
+        let n = 16 << 20; // 64 MiB of u32
+        let mut big: Vec<u32> = Vec::with_capacity(n);
+        advise_huge(&big);
+        big.extend(0..n as u32);
+        assert!(big.iter().enumerate().all(|(i, &v)| v as usize == i));
+
+        let mode = std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled");
+        if !mode.is_ok_and(|m| m.contains("[madvise]")) {
+            println!("huge pages not given on request here; contents checked only");
+            return;
+        }
+        // the mapping that holds the middle of `big` reports huge pages (smaps:
+        // AnonHugePages, in kB; the advice splits the allocation's mapping at its first
+        // whole page).
+        let addr = &big[n / 2] as *const u32 as usize;
+        let smaps = std::fs::read_to_string("/proc/self/smaps").unwrap();
+        let mut inside = false;
+        let mut huge_kb = 0;
+        for line in smaps.lines() {
+            if let Some((range, _)) = line.split_once(' ')
+                && let Some((a, b)) = range.split_once('-')
+                && let (Ok(a), Ok(b)) = (usize::from_str_radix(a, 16), usize::from_str_radix(b, 16))
+            {
+                inside = (a..b).contains(&addr);
+            } else if inside && let Some(kb) = line.strip_prefix("AnonHugePages:") {
+                huge_kb = kb.trim().trim_end_matches("kB").trim().parse().unwrap();
+            }
+        }
+        assert!(huge_kb > 0, "no huge pages under the advised array");
+    }
+}
