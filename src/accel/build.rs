@@ -133,7 +133,7 @@ pub fn build_bvh2(tris: &[[Vec3; 3]]) -> (Vec<Node>, Vec<u32>) {
 }
 
 /// Subtrees of at least this many triangles split their two halves across threads.
-pub const PARALLEL_MIN: usize = 1 << 14;
+pub const PARALLEL_MIN: usize = 1 << 12;
 
 /// The subtree over `p` (slots `offset ..` of the whole order), its box `bbox` and centroid
 /// box `cent`, at `depth`: nodes with the subtree's root at 0, leaves naming global slots.

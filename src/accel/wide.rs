@@ -15,7 +15,7 @@
 //! binary tree holds for the wide one and both find the same hits.
 
 use super::{Accel, Node};
-use crate::simd::{self, F32x8, Vec3x8};
+use crate::simd::{F32x8, Vec3x8};
 
 /// Children per node and triangles per leaf block.
 pub const BLOCK: usize = 8;
@@ -147,30 +147,38 @@ impl Bvh8 {
         let me = self.nodes.len();
         self.nodes.push(Node8::default());
         self.entry[b] = me as u32;
-        // open the largest-area child until 8 children or only leaves remain.
+        // open the largest-area child until 8 children or only leaves remain (each kid with
+        // its area, or -1 for a leaf, which is never opened).
+        let weight = |k: usize| {
+            if is_leaf(accel, counts, k) {
+                -1.0
+            } else {
+                area(&accel.nodes[k])
+            }
+        };
         let first = accel.nodes[b].first as usize;
-        let mut kids = [0usize; BLOCK];
-        (kids[0], kids[1]) = (first, first + 1);
+        let mut kids = [(0usize, 0f32); BLOCK];
+        (kids[0], kids[1]) = ((first, weight(first)), (first + 1, weight(first + 1)));
         let mut len = 2;
         while len < BLOCK {
-            let open = kids[..len]
-                .iter()
-                .enumerate()
-                .filter(|&(_, &k)| !is_leaf(accel, counts, k))
-                .max_by(|a, b| area(&accel.nodes[*a.1]).total_cmp(&area(&accel.nodes[*b.1])))
-                .map(|(i, _)| i);
+            // the last of the largest (as `max_by` picks), if any is not a leaf
+            let mut open = None;
+            for (i, &(_, w)) in kids[..len].iter().enumerate() {
+                if w >= 0.0 && open.is_none_or(|o: usize| w.total_cmp(&kids[o].1).is_ge()) {
+                    open = Some(i);
+                }
+            }
             let Some(i) = open else { break };
             // as Vec::swap_remove then push both children
-            let k = kids[i];
+            let k = kids[i].0;
             kids[i] = kids[len - 1];
             let f = accel.nodes[k].first as usize;
-            (kids[len - 1], kids[len]) = (f, f + 1);
+            (kids[len - 1], kids[len]) = ((f, weight(f)), (f + 1, weight(f + 1)));
             len += 1;
         }
-        let kids = &kids[..len];
         let mut deepest = depth;
-        for (slot, &k) in kids.iter().enumerate() {
-            let r = if is_leaf(accel, counts, k) {
+        for (slot, &(k, w)) in kids[..len].iter().enumerate() {
+            let r = if w < 0.0 {
                 self.leaf(accel, counts, k)
             } else {
                 let r = self.nodes.len() as u32;
@@ -207,41 +215,46 @@ impl Bvh8 {
 
 impl Node8 {
     fn set_child(&mut self, slot: usize, box_: &Node, r: u32) {
-        for k in 0..3 {
-            let mut lo = simd::lanes(self.bounds[0][k]);
-            let mut hi = simd::lanes(self.bounds[1][k]);
-            lo[slot] = box_.min[k];
-            hi[slot] = box_.max[k];
-            self.bounds[0][k] = simd::from_lanes(lo);
-            self.bounds[1][k] = simd::from_lanes(hi);
+        let [lo, hi]: &mut [[[f32; BLOCK]; 3]; 2] = wide::bytemuck::cast_mut(&mut self.bounds);
+        for ((lo, hi), (min, max)) in lo.iter_mut().zip(hi).zip(box_.min.iter().zip(&box_.max)) {
+            (lo[slot], hi[slot]) = (*min, *max);
         }
         self.child[slot] = r;
     }
 
     /// The per-octant visiting orders of the first `n` slots, and the in-use bits.
     fn set_order(&mut self, n: usize) {
-        let [lo, hi] = self.bounds.map(|c| c.map(simd::lanes));
-        let centre: [[f32; 3]; BLOCK] =
-            std::array::from_fn(|i| std::array::from_fn(|k| lo[k][i] + hi[k][i]));
+        let b: &[[[f32; BLOCK]; 3]; 2] = wide::bytemuck::cast_ref(&self.bounds);
+        let mut centre = [[0f32; 3]; BLOCK];
+        for (i, c) in centre.iter_mut().enumerate().take(n) {
+            *c = [0, 1, 2].map(|k| b[0][k][i] + b[1][k][i]);
+        }
         for oct in 0..8 {
             // octant bit k set: the direction's component k is negative; the key is the
             // centre's distance along the octant's diagonal (summed in axis order).
             let sign = |k: usize| if oct >> k & 1 == 1 { -1.0 } else { 1.0 };
-            let key: [f32; BLOCK] =
-                std::array::from_fn(|i| (0..3).map(|k| centre[i][k] * sign(k)).sum::<f32>());
-            // insertion sort of the first n slots by key (stable: ties keep slot order).
-            let mut slots: [usize; BLOCK] = std::array::from_fn(|i| i);
-            for a in 1..n {
-                let mut b = a;
-                while b > 0 && key[slots[b - 1]].total_cmp(&key[slots[b]]).is_gt() {
-                    slots.swap(b - 1, b);
-                    b -= 1;
-                }
+            let mut key = [0f32; BLOCK];
+            for (key, c) in key.iter_mut().zip(&centre).take(n) {
+                *key = c[0] * sign(0) + c[1] * sign(1) + c[2] * sign(2);
             }
-            self.order[oct] = slots
-                .iter()
-                .enumerate()
-                .fold(0, |acc, (k, &slot)| acc | (slot as u32) << (3 * k));
+            // each slot's rank in a stable sort by key (ties keep slot order), unused slots
+            // last: as integers ordered like `total_cmp`, every pair compared, no branches.
+            let ikey: [i32; BLOCK] = std::array::from_fn(|i| {
+                if i < n {
+                    let b = key[i].to_bits() as i32;
+                    b ^ (((b >> 31) as u32) >> 1) as i32
+                } else {
+                    i32::MAX
+                }
+            });
+            let mut order = 0u32;
+            for i in 0..BLOCK {
+                let rank = (0..BLOCK)
+                    .map(|j| u32::from(ikey[j] < ikey[i] || (ikey[j] == ikey[i] && j < i)))
+                    .sum::<u32>();
+                order |= (i as u32) << (3 * rank);
+            }
+            self.order[oct] = order;
         }
         self.order[0] |= ((1u32 << n) - 1) << 24;
     }
@@ -257,35 +270,37 @@ impl Bvh8 {
     /// Append the block of the triangles at SoA slots `slots` (at most 8), in lanes
     /// `0 .. slots.len()`.
     fn push_block(&mut self, accel: &Accel, slots: &[u32]) {
+        // (whitted's builder: a subtree's triangles are consecutive slots, copied as runs)
+        let contiguous = slots.windows(2).all(|w| w[1] == w[0] + 1);
         let t = &accel.tris;
-        let mut f = [[[0f32; BLOCK]; 3]; 4]; // n, v0, p1, p2: [axis][lane]
         let mut ids = BlockIds {
             prim: [u32::MAX; BLOCK],
             slot: [0; BLOCK],
         };
-        for (j, &sl) in slots.iter().enumerate() {
-            let i = sl as usize;
-            for (field, src) in f.iter_mut().zip([&t.n, &t.v0, &t.p1, &t.p2]) {
-                for (axis, column) in field.iter_mut().zip(src) {
-                    axis[j] = column[i];
+        // written in place (lanes past the triangles stay 0), no 384-byte copy per block
+        self.blocks.push(TriBlock8::default());
+        let block = self.blocks.last_mut().expect("just pushed");
+        let fields = [&mut block.n, &mut block.v0, &mut block.p1, &mut block.p2];
+        for (field, src) in fields.into_iter().zip([&t.n, &t.v0, &t.p1, &t.p2]) {
+            for (axis, column) in [&mut field.x, &mut field.y, &mut field.z]
+                .into_iter()
+                .zip(src)
+            {
+                let lanes: &mut [f32; BLOCK] = wide::bytemuck::cast_mut(axis);
+                if contiguous {
+                    let s0 = slots[0] as usize;
+                    lanes[..slots.len()].copy_from_slice(&column[s0..s0 + slots.len()]);
+                } else {
+                    for (lane, &sl) in lanes.iter_mut().zip(slots) {
+                        *lane = column[sl as usize];
+                    }
                 }
             }
-            ids.prim[j] = t.prim[i];
+        }
+        for (j, &sl) in slots.iter().enumerate() {
+            ids.prim[j] = t.prim[sl as usize];
             ids.slot[j] = sl;
         }
-        let v = |a: &[[f32; BLOCK]; 3]| {
-            Vec3x8::new(
-                simd::from_lanes(a[0]),
-                simd::from_lanes(a[1]),
-                simd::from_lanes(a[2]),
-            )
-        };
-        self.blocks.push(TriBlock8 {
-            n: v(&f[0]),
-            v0: v(&f[1]),
-            p1: v(&f[2]),
-            p2: v(&f[3]),
-        });
         self.ids.push(ids);
     }
 }
@@ -391,6 +406,41 @@ pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
 mod tests {
     use super::*;
     use crate::accel::BuildQuality;
+
+    /// Every node's per-octant order lists its used slots first, each once, sorted along the
+    /// octant's diagonal (by the box centre's signed sum), ties in slot order, then the
+    /// unused slots in slot order: what an insertion sort of the slots gives.
+    #[test]
+    fn octant_orders_are_stable_sorts_of_the_children() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/kitten.m");
+        let (mesh, _) = crate::io::load_mesh(&path).unwrap();
+        let tris: Vec<_> = mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| mesh.positions[i as usize]))
+            .collect();
+        let accel = Accel::build(&tris, BuildQuality::Binned);
+        for node in &accel.wide.nodes {
+            let n = node.valid().count_ones() as usize;
+            assert_eq!(node.valid(), (1 << n) - 1, "used slots come first");
+            let [lo, hi] = node.bounds.map(|c| c.map(crate::simd::lanes));
+            for oct in 0..8 {
+                let key = |i: usize| {
+                    let s = |k: usize| if oct >> k & 1 == 1 { -1.0 } else { 1.0 };
+                    (lo[0][i] + hi[0][i]) * s(0)
+                        + (lo[1][i] + hi[1][i]) * s(1)
+                        + (lo[2][i] + hi[2][i]) * s(2)
+                };
+                let mut want: Vec<usize> = (0..n).collect();
+                want.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
+                want.extend(n..BLOCK);
+                let got: Vec<usize> = (0..BLOCK)
+                    .map(|k| (node.order[oct] >> (3 * k) & 7) as usize)
+                    .collect();
+                assert_eq!(got, want, "octant {oct}");
+            }
+        }
+    }
 
     /// The builder counts block lanes, not triangles (`build.rs`, `lanes`), so the collapse
     /// fills its blocks: on the kitten at least 7 of 8 lanes on average (5.76 when the SAH
