@@ -407,11 +407,8 @@ mod tests {
     use super::*;
     use crate::accel::BuildQuality;
 
-    /// Every node's per-octant order lists its used slots first, each once, sorted along the
-    /// octant's diagonal (by the box centre's signed sum), ties in slot order, then the
-    /// unused slots in slot order: what an insertion sort of the slots gives.
-    #[test]
-    fn octant_orders_are_stable_sorts_of_the_children() {
+    /// The shipped kitten's triangles and their acceleration structure.
+    fn kitten() -> (Vec<[glam::Vec3; 3]>, Accel) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/kitten.m");
         let (mesh, _) = crate::io::load_mesh(&path).unwrap();
         let tris: Vec<_> = mesh
@@ -420,6 +417,15 @@ mod tests {
             .map(|t| t.map(|i| mesh.positions[i as usize]))
             .collect();
         let accel = Accel::build(&tris, BuildQuality::Binned);
+        (tris, accel)
+    }
+
+    /// Every node's per-octant order lists its used slots first, each once, sorted along the
+    /// octant's diagonal (by the box centre's signed sum), ties in slot order, then the
+    /// unused slots in slot order: what an insertion sort of the slots gives.
+    #[test]
+    fn octant_orders_are_stable_sorts_of_the_children() {
+        let (_, accel) = kitten();
         for node in &accel.wide.nodes {
             let n = node.valid().count_ones() as usize;
             assert_eq!(node.valid(), (1 << n) - 1, "used slots come first");
@@ -447,14 +453,7 @@ mod tests {
     /// counted triangles), at under 80 bytes per triangle (89.9 then).
     #[test]
     fn kitten_blocks_are_nearly_full() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/kitten.m");
-        let (mesh, _) = crate::io::load_mesh(&path).unwrap();
-        let tris: Vec<_> = mesh
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| mesh.positions[i as usize]))
-            .collect();
-        let accel = Accel::build(&tris, BuildQuality::Binned);
+        let (tris, accel) = kitten();
         let w = &accel.wide;
         let used: usize = w
             .ids
