@@ -6,7 +6,7 @@
 
 use super::hybrid8::hand_off;
 use super::scalar::{BARY_SAFE, inside_f64};
-use super::tri_soa::LeafView;
+use super::tri_soa::Leaf;
 use super::wide::{BlockIds, LEAF_BIT, NO_ENTRY, TriBlock8, leaf_blocks};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
@@ -76,62 +76,8 @@ pub fn hit_triangle8(
     (hit, t, b1, b2)
 }
 
-/// A leaf's triangles as `hit_triangle8` reads them: from the SoA columns (`LeafView`) or from
-/// a block of the wide tree (`BlockLeaf`); the same floats either way.
-pub trait Leaf {
-    /// Triangles in the leaf.
-    fn len(&self) -> usize;
-    /// Whether the leaf has no triangles.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-    /// `n` of the `j`-th triangle.
-    fn n(&self, j: usize) -> [f32; 3];
-    /// `v0` of the `j`-th triangle.
-    fn v0(&self, j: usize) -> [f32; 3];
-    /// `p1` of the `j`-th triangle.
-    fn p1(&self, j: usize) -> [f32; 3];
-    /// `p2` of the `j`-th triangle.
-    fn p2(&self, j: usize) -> [f32; 3];
-    /// `|n|` of the `j`-th triangle.
-    fn n_len(&self, j: usize) -> f32;
-    /// SoA slot of the `j`-th triangle.
-    fn slot(&self, j: usize) -> usize;
-}
-
-impl Leaf for LeafView<'_> {
-    #[inline(always)]
-    fn len(&self) -> usize {
-        LeafView::len(self)
-    }
-    #[inline(always)]
-    fn n(&self, j: usize) -> [f32; 3] {
-        LeafView::n(self, j)
-    }
-    #[inline(always)]
-    fn v0(&self, j: usize) -> [f32; 3] {
-        LeafView::v0(self, j)
-    }
-    #[inline(always)]
-    fn p1(&self, j: usize) -> [f32; 3] {
-        LeafView::p1(self, j)
-    }
-    #[inline(always)]
-    fn p2(&self, j: usize) -> [f32; 3] {
-        LeafView::p2(self, j)
-    }
-    #[inline(always)]
-    fn n_len(&self, j: usize) -> f32 {
-        LeafView::n_len(self, j)
-    }
-    #[inline(always)]
-    fn slot(&self, j: usize) -> usize {
-        LeafView::slot(self, j)
-    }
-}
-
 /// A leaf read from its wide block: `[field][axis][lane]` floats (n, v0, p1, p2), `|n|` per
-/// lane computed as `TriangleSoa` computes it (`sqrt(<n, n>)`, the same float), the slots.
+/// lane ([`TriBlock8::n_len`], the float `TriangleSoa` stores), the slots.
 pub struct BlockLeaf<'a> {
     f: [[&'a [f32; 8]; 3]; 4],
     n_len: [f32; 8],
@@ -146,7 +92,7 @@ impl<'a> BlockLeaf<'a> {
         BlockLeaf {
             f: [&block.n, &block.v0, &block.p1, &block.p2]
                 .map(|v| [&v.x, &v.y, &v.z].map(wide::bytemuck::cast_ref)),
-            n_len: simd::lanes(simd::sqrt(block.n.dot(block.n))),
+            n_len: simd::lanes(block.n_len()),
             ids,
             len: (len as usize).min(8),
         }

@@ -141,45 +141,57 @@ pub struct LeafView<'a> {
     n_len: &'a [f32],
 }
 
-impl<'a> LeafView<'a> {
+/// A leaf's triangles as the packet test (`packet::hit_triangle8`) reads them: from the SoA
+/// columns ([`LeafView`]) or from a block of the wide tree (`packet::BlockLeaf`); the same
+/// floats either way.
+pub trait Leaf {
     /// Triangles in the leaf.
+    fn len(&self) -> usize;
+    /// Whether the leaf has no triangles.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// `n` of the `j`-th triangle.
+    fn n(&self, j: usize) -> [f32; 3];
+    /// `v0` of the `j`-th triangle.
+    fn v0(&self, j: usize) -> [f32; 3];
+    /// `p1` of the `j`-th triangle.
+    fn p1(&self, j: usize) -> [f32; 3];
+    /// `p2` of the `j`-th triangle.
+    fn p2(&self, j: usize) -> [f32; 3];
+    /// `|n|` of the `j`-th triangle.
+    fn n_len(&self, j: usize) -> f32;
+    /// SoA slot of the `j`-th triangle.
+    fn slot(&self, j: usize) -> usize;
+}
+
+impl Leaf for LeafView<'_> {
     #[inline(always)]
-    pub fn len(&self) -> usize {
+    fn len(&self) -> usize {
         self.n_len.len()
     }
-    /// Whether the leaf has no triangles.
     #[inline(always)]
-    pub fn is_empty(&self) -> bool {
-        self.n_len.is_empty()
-    }
-    /// `n` of the leaf's `j`-th triangle.
-    #[inline(always)]
-    pub fn n(&self, j: usize) -> [f32; 3] {
+    fn n(&self, j: usize) -> [f32; 3] {
         self.n.map(|c| c[j])
     }
-    /// `v0` of the leaf's `j`-th triangle.
     #[inline(always)]
-    pub fn v0(&self, j: usize) -> [f32; 3] {
+    fn v0(&self, j: usize) -> [f32; 3] {
         self.v0.map(|c| c[j])
     }
-    /// `p1` of the leaf's `j`-th triangle.
     #[inline(always)]
-    pub fn p1(&self, j: usize) -> [f32; 3] {
+    fn p1(&self, j: usize) -> [f32; 3] {
         self.p1.map(|c| c[j])
     }
-    /// `p2` of the leaf's `j`-th triangle.
     #[inline(always)]
-    pub fn p2(&self, j: usize) -> [f32; 3] {
+    fn p2(&self, j: usize) -> [f32; 3] {
         self.p2.map(|c| c[j])
     }
-    /// `|n|` of the leaf's `j`-th triangle.
     #[inline(always)]
-    pub fn n_len(&self, j: usize) -> f32 {
+    fn n_len(&self, j: usize) -> f32 {
         self.n_len[j]
     }
-    /// SoA slot of the leaf's `j`-th triangle.
     #[inline(always)]
-    pub fn slot(&self, j: usize) -> usize {
+    fn slot(&self, j: usize) -> usize {
         self.first + j
     }
 }

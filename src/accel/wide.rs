@@ -73,6 +73,15 @@ pub struct TriBlock8 {
     pub p2: Vec3x8,
 }
 
+impl TriBlock8 {
+    /// `|n|` per lane, computed as `TriangleSoa::new` computes `n_len` (`n.length()`: the same
+    /// products, sums and square root), so it is the same float.
+    #[inline(always)]
+    pub fn n_len(&self) -> F32x8 {
+        self.n.dot(self.n).sqrt()
+    }
+}
+
 /// The cold half of a [`TriBlock8`] (same index in [`Bvh8::ids`]): read only to report a hit
 /// or to settle a near-edge lane in f64.
 #[derive(Clone, Copy, Debug)]

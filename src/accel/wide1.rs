@@ -95,8 +95,8 @@ pub fn hit_block1<const ANY_HIT: bool>(
     let b0 = simd::splat(1.0) - b1 - b2;
     // inside when no coordinate is negative; lanes within BARY_SAFE of an edge by the f64
     // edge signs, as hit_triangle1 does.
-    // |n| as TriangleSoa::new computes it (n.length(): the same products, sums and sqrt).
-    let n_len = b.n.dot(b.n).sqrt();
+    // (|n| per lane: the float TriangleSoa stores, see TriBlock8::n_len)
+    let n_len = b.n_len();
     let s = simd::splat(BARY_SAFE) * (r.dlen * n_len / dn.abs());
     let ns = -s;
     let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
