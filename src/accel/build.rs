@@ -185,6 +185,8 @@ fn subtree(mut p: Prims, offset: usize, bbox: Box3, cent: Box3, depth: u32) -> V
         }
     };
     let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
+    // (the final array for big trees: `Accel::build` pads its boxes in place, the same
+    // allocation, so the advice reaches traversal)
     super::pages::advise_huge(&nodes);
     nodes.push(node_of(bbox, 1, 0));
     nodes.push(moved(l[0], lbase));
