@@ -24,6 +24,9 @@ pub struct RayWide {
     pub dlen: F32x8,
     /// [`safe_inv`] of each direction component, in every lane (never `±inf`).
     pub inv: Vec3x8,
+    /// `inv * SLAB_FAR_SCALE` per component (rounded once): far-plane distances come out
+    /// already widened (see [`hit_node1`]).
+    pub inv_far: Vec3x8,
     /// Per axis, which corner of a box is its near plane (`Node8::bounds[near[k]]`): 1, the
     /// maximum, where `inv[k] < 0`, else 0; the far plane is the other one.
     pub near: [usize; 3],
@@ -51,6 +54,7 @@ impl RayWide {
             // |d| as Ray1 computes it, so the grazing margin is the same float.
             dlen: simd::splat((d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt()),
             inv: Vec3x8::splat(inv),
+            inv_far: Vec3x8::splat(inv.map(|v| v * SLAB_FAR_SCALE)),
             near,
             octant: near[0] | near[1] << 1 | near[2] << 2,
             o1,
@@ -149,18 +153,21 @@ pub fn hit_block1<const ANY_HIT: bool>(
 /// `min` / `max` of the two plane distances of `hit_box1`.
 #[inline(always)]
 pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> NodeHits {
-    let axis = |k: usize, o: F32x8, inv: F32x8| {
+    let axis = |k: usize, o: F32x8, inv: F32x8, inv_far: F32x8| {
         // (`& 1`: the index is 0 or 1, which the compiler then knows.)
         let near = node.bounds[r.near[k] & 1][k];
         let far = node.bounds[(r.near[k] ^ 1) & 1][k];
-        ((near - o) * inv, (far - o) * inv)
+        ((near - o) * inv, (far - o) * inv_far)
     };
-    let (nx, fx) = axis(0, r.o.x, r.inv.x);
-    let (ny, fy) = axis(1, r.o.y, r.inv.y);
-    let (nz, fz) = axis(2, r.o.z, r.inv.z);
+    let (nx, fx) = axis(0, r.o.x, r.inv.x, r.inv_far.x);
+    let (ny, fy) = axis(1, r.o.y, r.inv.y, r.inv_far.y);
+    let (nz, fz) = axis(2, r.o.z, r.inv.z, r.inv_far.z);
     let lo = simd::max(simd::max(nx, ny), simd::max(nz, simd::splat(r.tnear)));
-    let hi = simd::min(simd::min(fx, fy), simd::min(fz, simd::splat(tfar)));
-    let hit = simd::bitmask(simd::le(lo, hi * simd::splat(SLAB_FAR_SCALE))) & node.valid();
+    let hi = simd::min(
+        simd::min(fx, fy),
+        simd::min(fz, simd::splat(tfar * SLAB_FAR_SCALE)),
+    );
+    let hit = simd::bitmask(simd::le(lo, hi)) & node.valid();
     // (the children whose box the ray starts in: entered no later than tnear)
     let inside = simd::bitmask(simd::le(lo, simd::splat(r.tnear)));
     NodeHits {
