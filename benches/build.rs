@@ -45,12 +45,7 @@ fn bench(c: &mut Criterion) {
             "{name}"
         );
         assert!(a.depth > 8 && a.depth < 64, "{name}: depth {}", a.depth);
-        let leaf_tris: usize = a
-            .wide
-            .ids
-            .iter()
-            .map(|b| b.prim.iter().filter(|&&p| p != u32::MAX).count())
-            .sum();
+        let leaf_tris: usize = a.wide.blocks.iter().map(|b| b.triangles()).sum();
         assert_eq!(
             leaf_tris,
             tris.len(),

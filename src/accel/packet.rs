@@ -7,7 +7,7 @@
 use super::hybrid8::hand_off;
 use super::scalar::{BARY_SAFE, inside_f64};
 use super::tri_soa::Leaf;
-use super::wide::{BlockIds, LEAF_BIT, NO_ENTRY, TriBlock8, leaf_blocks};
+use super::wide::{LEAF_BIT, NO_ENTRY, TriBlock8, leaf_blocks};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
@@ -81,19 +81,19 @@ pub fn hit_triangle8(
 pub struct BlockLeaf<'a> {
     f: [[&'a [f32; 8]; 3]; 4],
     n_len: [f32; 8],
-    ids: &'a BlockIds,
+    slot: &'a [u32; 8],
     len: usize,
 }
 
 impl<'a> BlockLeaf<'a> {
     /// The first `len` lanes of `block`.
     #[inline(always)]
-    pub fn new(block: &'a TriBlock8, ids: &'a BlockIds, len: u32) -> BlockLeaf<'a> {
+    pub fn new(block: &'a TriBlock8, len: u32) -> BlockLeaf<'a> {
         BlockLeaf {
             f: [&block.n, &block.v0, &block.p1, &block.p2]
                 .map(|v| [&v.x, &v.y, &v.z].map(wide::bytemuck::cast_ref)),
             n_len: simd::lanes(block.n_len()),
-            ids,
+            slot: &block.slot,
             len: (len as usize).min(8),
         }
     }
@@ -131,7 +131,7 @@ impl Leaf for BlockLeaf<'_> {
     }
     #[inline(always)]
     fn slot(&self, j: usize) -> usize {
-        self.ids.slot[j] as usize
+        self.slot[j] as usize
     }
 }
 
@@ -266,11 +266,7 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
             // block (the lines the single-ray walks read too), else from the columns
             if SWITCH > 0 && entry & LEAF_BIT != 0 && leaf_blocks(entry).1 == 1 {
                 let b = leaf_blocks(entry).0;
-                test_leaf!(BlockLeaf::new(
-                    &accel.wide.blocks[b],
-                    &accel.wide.ids[b],
-                    n.count
-                ));
+                test_leaf!(BlockLeaf::new(&accel.wide.blocks[b], n.count));
             } else {
                 test_leaf!(accel.tris.leaf(n.first as usize, n.count as usize));
             }

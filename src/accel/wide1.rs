@@ -110,12 +110,11 @@ pub fn hit_block1<const ANY_HIT: bool>(
     if bits | unsure == 0 {
         return None;
     }
-    let ids = &accel.wide.ids[block];
     if ANY_HIT && bits != 0 {
         // any hit will do: the first sure lane, without settling the near-edge ones.
         let lane = bits.trailing_zeros() as usize;
         return Some(Hit {
-            tri: ids.prim[lane],
+            tri: b.prim[lane],
             t: simd::lanes(t)[lane],
             b1: simd::lanes(b1)[lane],
             b2: simd::lanes(b2)[lane],
@@ -124,7 +123,7 @@ pub fn hit_block1<const ANY_HIT: bool>(
     while unsure != 0 {
         let lane = unsure.trailing_zeros() as usize;
         unsure &= unsure - 1;
-        if inside_f64(accel, ids.slot[lane] as usize, r.o1, r.d1) {
+        if inside_f64(accel, b.slot[lane] as usize, r.o1, r.d1) {
             bits |= 1 << lane;
         }
     }
@@ -134,7 +133,7 @@ pub fn hit_block1<const ANY_HIT: bool>(
     while bits != 0 {
         let lane = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        let tri = ids.prim[lane];
+        let tri = b.prim[lane];
         if best.is_none_or(|h| t[lane] < h.t || (t[lane] == h.t && tri < h.tri)) {
             best = Some(Hit {
                 tri,
