@@ -14,8 +14,9 @@
 //! Boxes are the BVH2's padded boxes (`Accel::build`), so every slab-test guarantee of the
 //! binary tree holds for the wide one and both find the same hits.
 
-use super::{Accel, Node};
+use super::{Accel, Node, TriangleSoa};
 use crate::simd::{F32x8, Vec3x8};
+use rayon::prelude::*;
 
 /// Children per node and triangles per leaf block.
 pub const BLOCK: usize = 8;
@@ -117,31 +118,55 @@ pub struct Bvh8 {
 pub const NO_ENTRY: u32 = LEAF_BIT - 1;
 
 impl Bvh8 {
-    /// Collapse `accel`'s binary tree (see the module header).
+    /// Collapse `accel`'s binary tree (see the module header): [`Bvh8::plan`], then
+    /// [`Bvh8::fill`] from its triangles.
     pub fn collapse(accel: &Accel) -> Bvh8 {
+        let mut out = Bvh8::plan(&accel.nodes, &accel.tris.prim);
+        out.fill(&accel.tris);
+        out
+    }
+
+    /// The wide nodes over the binary tree `nodes` (padded boxes), and blocks holding only
+    /// their triangles' ids (`prim[slot]` is the original index of SoA slot `slot`): it
+    /// needs no triangle data, so `Accel::build` runs it beside the SoA layout, then
+    /// [`Bvh8::fill`]s the blocks' lanes.
+    pub fn plan(nodes: &[Node], prim: &[u32]) -> Bvh8 {
         let mut out = Bvh8::default();
-        if accel.nodes.is_empty() {
+        if nodes.is_empty() {
             return out;
         }
-        let counts = subtree_counts(&accel.nodes);
-        out.entry = vec![NO_ENTRY; accel.nodes.len()];
-        out.nodes.reserve(accel.nodes.len() / 4 + 1);
-        out.blocks.reserve(accel.tris.len() / 4 + 1);
+        let src = Src {
+            nodes,
+            prim,
+            counts: subtree_counts(nodes),
+        };
+        out.entry = vec![NO_ENTRY; nodes.len()];
+        out.nodes.reserve(nodes.len() / 4 + 1);
+        out.blocks.reserve(prim.len() / 4 + 1);
         super::pages::advise_huge(&out.nodes);
         super::pages::advise_huge(&out.blocks);
-        let root = &accel.nodes[0];
-        if counts[0] as usize <= BLOCK || root.count > 0 {
+        let root = &nodes[0];
+        if src.counts[0] as usize <= BLOCK || root.count > 0 {
             // The whole scene is one leaf: a root node with a single child.
             out.nodes.push(Node8::default());
-            let leaf = out.leaf(accel, &counts, 0);
+            let leaf = out.leaf(&src, 0);
             out.nodes[0].set_child(0, root, leaf);
             out.nodes[0].set_order(1);
             out.depth = 1;
             out.entry[0] = 0;
         } else {
-            out.depth = out.node(accel, &counts, 0, 1);
+            out.depth = out.node(&src, 0, 1);
         }
         out
+    }
+
+    /// Copy every block's triangles from `t` into its lanes (by the slots [`Bvh8::plan`]
+    /// recorded), blocks in parallel on rayon's current pool.
+    pub fn fill(&mut self, t: &TriangleSoa) {
+        self.blocks
+            .par_iter_mut()
+            .with_min_len(1024)
+            .for_each(|block| block.fill(t));
     }
 
     /// Bytes of the tree and its blocks (the triangles' hot layout).
@@ -151,20 +176,20 @@ impl Bvh8 {
 
     /// Make the wide node for binary node `b` (not a leaf) and its subtree; returns the depth
     /// below and including it.
-    fn node(&mut self, accel: &Accel, counts: &[u32], b: usize, depth: usize) -> usize {
+    fn node(&mut self, src: &Src, b: usize, depth: usize) -> usize {
         let me = self.nodes.len();
         self.nodes.push(Node8::default());
         self.entry[b] = me as u32;
         // open the largest-area child until 8 children or only leaves remain (each kid with
         // its area, or -1 for a leaf, which is never opened).
         let weight = |k: usize| {
-            if is_leaf(accel, counts, k) {
+            if src.is_leaf(k) {
                 -1.0
             } else {
-                area(&accel.nodes[k])
+                area(&src.nodes[k])
             }
         };
-        let first = accel.nodes[b].first as usize;
+        let first = src.nodes[b].first as usize;
         let mut kids = [(0usize, 0f32); BLOCK];
         (kids[0], kids[1]) = ((first, weight(first)), (first + 1, weight(first + 1)));
         let mut len = 2;
@@ -180,34 +205,42 @@ impl Bvh8 {
             // as Vec::swap_remove then push both children
             let k = kids[i].0;
             kids[i] = kids[len - 1];
-            let f = accel.nodes[k].first as usize;
+            let f = src.nodes[k].first as usize;
             (kids[len - 1], kids[len]) = ((f, weight(f)), (f + 1, weight(f + 1)));
             len += 1;
         }
         let mut deepest = depth;
         for (slot, &(k, w)) in kids[..len].iter().enumerate() {
             let r = if w < 0.0 {
-                self.leaf(accel, counts, k)
+                self.leaf(src, k)
             } else {
                 let r = self.nodes.len() as u32;
-                deepest = deepest.max(self.node(accel, counts, k, depth + 1));
+                deepest = deepest.max(self.node(src, k, depth + 1));
                 r
             };
-            self.nodes[me].set_child(slot, &accel.nodes[k], r);
+            self.nodes[me].set_child(slot, &src.nodes[k], r);
         }
         self.nodes[me].set_order(len);
         deepest
     }
 
     /// Blocks for all triangles below binary node `b`; returns the leaf reference.
-    fn leaf(&mut self, accel: &Accel, counts: &[u32], b: usize) -> u32 {
+    fn leaf(&mut self, src: &Src, b: usize) -> u32 {
         let mut slots = std::mem::take(&mut self.scratch);
         slots.clear();
-        slots.reserve(counts[b] as usize);
-        collect_slots(&accel.nodes, b, &mut slots);
+        slots.reserve(src.counts[b] as usize);
+        collect_slots(src.nodes, b, &mut slots);
         let first = self.blocks.len();
         for chunk in slots.chunks(BLOCK) {
-            self.push_block(accel, chunk);
+            // (written in place: lanes stay 0 until `fill`, no 448-byte copy per block)
+            self.blocks.push(TriBlock8 {
+                prim: [u32::MAX; BLOCK],
+                ..TriBlock8::default()
+            });
+            let block = self.blocks.last_mut().expect("just pushed");
+            for (j, &sl) in chunk.iter().enumerate() {
+                (block.prim[j], block.slot[j]) = (src.prim[sl as usize], sl);
+            }
         }
         self.scratch = slots;
         let n = self.blocks.len() - first;
@@ -274,29 +307,24 @@ impl Node8 {
     }
 }
 
-impl Bvh8 {
-    /// Append the block of the triangles at SoA slots `slots` (at most 8), in lanes
-    /// `0 .. slots.len()`.
-    fn push_block(&mut self, accel: &Accel, slots: &[u32]) {
+impl TriBlock8 {
+    /// The lanes of the triangles at the slots recorded in `slot` (lanes past the
+    /// triangles stay 0).
+    fn fill(&mut self, t: &TriangleSoa) {
+        let len = self.triangles();
+        let slots = &self.slot[..len];
         // (whitted's builder: a subtree's triangles are consecutive slots, copied as runs)
         let contiguous = slots.windows(2).all(|w| w[1] == w[0] + 1);
-        let t = &accel.tris;
-        // written in place (lanes past the triangles stay 0), no 448-byte copy per block
-        self.blocks.push(TriBlock8 {
-            prim: [u32::MAX; BLOCK],
-            ..TriBlock8::default()
-        });
-        let block = self.blocks.last_mut().expect("just pushed");
-        let fields = [&mut block.n, &mut block.v0, &mut block.p1, &mut block.p2];
+        let fields = [&mut self.n, &mut self.v0, &mut self.p1, &mut self.p2];
         for (field, src) in fields.into_iter().zip([&t.n, &t.v0, &t.p1, &t.p2]) {
             for (axis, column) in [&mut field.x, &mut field.y, &mut field.z]
                 .into_iter()
                 .zip(src)
             {
                 let lanes: &mut [f32; BLOCK] = wide::bytemuck::cast_mut(axis);
-                if contiguous {
+                if contiguous && len > 0 {
                     let s0 = slots[0] as usize;
-                    lanes[..slots.len()].copy_from_slice(&column[s0..s0 + slots.len()]);
+                    lanes[..len].copy_from_slice(&column[s0..s0 + len]);
                 } else {
                     for (lane, &sl) in lanes.iter_mut().zip(slots) {
                         *lane = column[sl as usize];
@@ -304,15 +332,22 @@ impl Bvh8 {
                 }
             }
         }
-        for (j, &sl) in slots.iter().enumerate() {
-            block.prim[j] = t.prim[sl as usize];
-            block.slot[j] = sl;
-        }
     }
 }
 
-fn is_leaf(accel: &Accel, counts: &[u32], b: usize) -> bool {
-    accel.nodes[b].count > 0 || counts[b] as usize <= BLOCK
+/// What the collapse reads: the binary tree, each slot's original triangle index, and the
+/// triangles below each binary node.
+struct Src<'a> {
+    nodes: &'a [Node],
+    prim: &'a [u32],
+    counts: Vec<u32>,
+}
+
+impl Src<'_> {
+    /// Whether binary node `b` becomes one wide leaf (a binary leaf, or at most a block).
+    fn is_leaf(&self, b: usize) -> bool {
+        self.nodes[b].count > 0 || self.counts[b] as usize <= BLOCK
+    }
 }
 
 /// Half the surface area of a node's box (the SAH weight; the factor 2 does not matter).
@@ -384,7 +419,15 @@ pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
                 let slots: Vec<u32> = (start..start + count)
                     .map(|j| slot_of[cw.primitive_indices[j as usize] as usize])
                     .collect();
-                out.push_block(accel, &slots);
+                let mut block = TriBlock8 {
+                    prim: [u32::MAX; BLOCK],
+                    ..TriBlock8::default()
+                };
+                for (j, &sl) in slots.iter().enumerate() {
+                    (block.prim[j], block.slot[j]) = (accel.tris.prim[sl as usize], sl);
+                }
+                block.fill(&accel.tris);
+                out.blocks.push(block);
                 LEAF_BIT | (out.blocks.len() - 1) as u32
             } else {
                 n.child_node_index(c)
