@@ -187,6 +187,15 @@ fn check_packets(
     Ok(())
 }
 
+/// `rays` sorted by direction octant (sign bits, -0 counting as negative, as `safe_inv`
+/// keeps the sign), so that most packets of 8 share one octant: the hybrid engine's
+/// per-packet slab test (`hit_box8_octant`) runs on those.
+fn by_octant(rays: &[Ray]) -> Vec<Ray> {
+    let mut sorted = rays.to_vec();
+    sorted.sort_by_key(|r| r.dir.to_array().map(|c| c.is_sign_negative() as u8));
+    sorted
+}
+
 /// The tree under test: whitted's binned SAH builder or an obvhs preset (both must give
 /// every engine the same hits).
 fn builder(binned: bool) -> BuildQuality {
@@ -205,6 +214,7 @@ proptest! {
     fn packet_equals_scalar_equals_brute_force((tris, rays) in scene(), masks in prop::collection::vec(any::<u8>(), 1..4), cull in any::<bool>(), binned in any::<bool>()) {
         let accel = Accel::build(&tris, builder(binned));
         check_packets(&accel, &rays, &masks, cull)?;
+        check_packets(&accel, &by_octant(&rays), &masks, cull)?;
     }
 
     /// The same on soups big enough for wide trees of several levels, leaves of several
@@ -215,6 +225,7 @@ proptest! {
         let accel = Accel::build(&tris, builder(binned));
         prop_assert!(accel.wide.depth >= 1);
         check_packets(&accel, &rays, &masks, cull)?;
+        check_packets(&accel, &by_octant(&rays), &masks, cull)?;
     }
 
     /// The scalar kernel agrees with the literal f64 formula: same hit / miss wherever the
