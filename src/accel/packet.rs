@@ -230,17 +230,19 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
     let mut lanes = None;
     let mut node = 0u32;
     // Hybrid: when the active lanes share one direction octant, near and far planes are
-    // picked per packet (`hit_box8_octant`). Measured (README, "Engines"): hybrid8 1.03-1.07x
-    // on the kitten's incoherent, primary-hits and primary rays and 1.03-1.05x at 1.3M; the
-    // packet engine keeps the per-lane test, which measured 0.91x on its shadow rays with it.
-    let inv_far = inv * simd::splat(SLAB_FAR_SCALE);
-    let act = simd::bitmask(active);
-    let neg = [inv.x, inv.y, inv.z].map(|v| simd::bitmask(simd::lt(v, simd::splat(0.0))) & act);
-    let octant = SWITCH > 0 && neg.iter().all(|&b| b == 0 || b == act);
-    let near = neg.map(|b| b != 0);
+    // picked per packet (`hit_box8_octant`). Measured (README, "Engines"): hybrid8 1.03-1.08x
+    // on the kitten's incoherent, primary-hits and primary rays, level at 1.3M; the packet
+    // engine keeps the per-lane test, which measured 0.91x on its shadow rays with it. (With
+    // SWITCH = 0 the octant is not even looked at.)
+    let octant = (SWITCH > 0).then(|| {
+        let act = simd::bitmask(active);
+        let neg = [inv.x, inv.y, inv.z].map(|v| simd::bitmask(simd::lt(v, simd::splat(0.0))) & act);
+        let one = neg.iter().all(|&b| b == 0 || b == act);
+        one.then(|| (neg.map(|b| b != 0), inv * simd::splat(SLAB_FAR_SCALE)))
+    });
     let boxes = |n: u32, tfar: F32x8, m: M32x8| {
         let node = &accel.nodes[n as usize];
-        if octant {
+        if let Some(Some((near, inv_far))) = octant {
             let tfar_wide = tfar * simd::splat(SLAB_FAR_SCALE);
             hit_box8_octant(
                 node, &rays.o, &inv, &inv_far, near, rays.tnear, tfar_wide, m,

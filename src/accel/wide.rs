@@ -64,9 +64,9 @@ pub struct Node8 {
 /// they never hit (culled too: `<d, 0> >= 0`).
 ///
 /// The ids sit in the block's last line rather than in an array of their own: at 1.3M
-/// triangles, where the blocks come from L3, `wide1` ran 1.04-1.06x on primary hits and
-/// 1.03-1.11x on shadow rays that way (three alternating runs), the hit's line being one
-/// line past the lines just read instead of a miss of its own.
+/// triangles, where the blocks come from L3, `wide1` ran 1.02-1.06x on hits, shadow and
+/// incoherent rays that way (three alternating bench runs; kitten level), the hit's line
+/// being one line past the lines just read instead of a miss of its own.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub struct TriBlock8 {
