@@ -4,6 +4,7 @@
 pub mod build;
 pub mod hybrid8;
 pub mod packet;
+pub mod packet16;
 pub mod pages;
 pub mod scalar;
 pub mod tri_soa;
@@ -12,6 +13,7 @@ pub mod wide1;
 
 pub use hybrid8::{intersect_hybrid8, occluded_hybrid8};
 pub use packet::{intersect8, occluded8};
+pub use packet16::{intersect16, occluded16};
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
 pub use wide::Bvh8;

@@ -2,8 +2,8 @@
 
 use super::*;
 use crate::accel::{
-    Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8, occluded_hybrid8,
-    occluded_wide1, occluded1, occluded8,
+    Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8, intersect16,
+    occluded_hybrid8, occluded_wide1, occluded1, occluded8, occluded16,
 };
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
@@ -82,6 +82,10 @@ pub enum Out {
     Hits8(Vec<HitPacket8>, Intersect8),
     /// Packet any hit: per packet the occluded lanes, bit `i` for lane `i`.
     Occ8(Vec<u8>, Occluded8),
+    /// 16-ray packets (two of [`Packets`] at a time) closest hit, stored as `Hits8`.
+    Hits16(Vec<HitPacket8>, Intersect16),
+    /// 16-ray packets any hit, stored as `Occ8`.
+    Occ16(Vec<u8>, Occluded16),
 }
 
 /// A single-ray closest-hit kernel (`intersect1`, `intersect_wide1`).
@@ -92,6 +96,11 @@ pub type Occluded1 = fn(&Accel, &Ray, bool) -> bool;
 pub type Intersect8 = fn(&Accel, &RayPacket8, M32x8, bool) -> HitPacket8;
 /// A packet any-hit kernel.
 pub type Occluded8 = fn(&Accel, &RayPacket8, M32x8, bool) -> M32x8;
+
+/// A 16-ray closest-hit kernel (`intersect16`) on two packets of 8.
+pub type Intersect16 = fn(&Accel, [&RayPacket8; 2], [M32x8; 2], bool) -> [HitPacket8; 2];
+/// A 16-ray any-hit kernel (`occluded16`).
+pub type Occluded16 = fn(&Accel, [&RayPacket8; 2], [M32x8; 2], bool) -> [M32x8; 2];
 
 /// The engines timed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -105,11 +114,20 @@ pub enum Engine {
     /// `intersect_hybrid8` / `occluded_hybrid8`: packets on the binary tree, single rays on
     /// the wide tree once few lanes remain.
     Hybrid,
+    /// `intersect16` / `occluded16` on the binary tree, 16 consecutive rays (AVX-512; two
+    /// `packet8` calls on a CPU without it).
+    Packet16,
 }
 
 impl Engine {
     /// Every engine, in report order.
-    pub const ALL: [Engine; 4] = [Engine::Scalar, Engine::Packet, Engine::Wide, Engine::Hybrid];
+    pub const ALL: [Engine; 5] = [
+        Engine::Scalar,
+        Engine::Packet,
+        Engine::Wide,
+        Engine::Hybrid,
+        Engine::Packet16,
+    ];
 
     /// The engine's key in tables and JSON.
     pub fn name(self) -> &'static str {
@@ -118,13 +136,14 @@ impl Engine {
             Engine::Packet => "packet8",
             Engine::Wide => "wide1",
             Engine::Hybrid => "hybrid8",
+            Engine::Packet16 => "packet16",
         }
     }
 
     /// Packet engines are compared with Embree's 8- and 16-wide packets, single-ray ones
     /// with its single rays.
     pub fn packet(self) -> bool {
-        matches!(self, Engine::Packet | Engine::Hybrid)
+        matches!(self, Engine::Packet | Engine::Hybrid | Engine::Packet16)
     }
 }
 
@@ -158,6 +177,43 @@ fn occ8(accel: &Accel, f: Occluded8, rays: &[RayPacket8], active: &[M32x8], out:
     }
 }
 
+/// Pairs of packets (a last odd one with an inactive twin) and their outputs.
+fn pairs<'a, T>(
+    rays: &'a [RayPacket8],
+    active: &'a [M32x8],
+    out: &'a mut [T],
+) -> impl Iterator<Item = ([&'a RayPacket8; 2], [M32x8; 2], &'a mut [T])> {
+    rays.chunks(2)
+        .zip(active.chunks(2))
+        .zip(out.chunks_mut(2))
+        .map(|((r, a), o)| match (r, a) {
+            ([r0, r1], [a0, a1]) => ([r0, r1], [*a0, *a1], o),
+            _ => ([&r[0], &r[0]], [a[0], simd::mask_from_bits(0)], o),
+        })
+}
+
+fn hits16(
+    accel: &Accel,
+    f: Intersect16,
+    rays: &[RayPacket8],
+    active: &[M32x8],
+    out: &mut [HitPacket8],
+) {
+    for (r, a, o) in pairs(rays, active, out) {
+        let h = f(accel, r, a, false);
+        o.copy_from_slice(&h[..o.len()]);
+    }
+}
+
+fn occ16(accel: &Accel, f: Occluded16, rays: &[RayPacket8], active: &[M32x8], out: &mut [u8]) {
+    for (r, a, o) in pairs(rays, active, out) {
+        let m = f(accel, r, a, false);
+        for (o, m) in o.iter_mut().zip(m) {
+            *o = simd::bitmask(m) as u8;
+        }
+    }
+}
+
 /// One pass of an engine over a set, in place; with a pool, chunks of [`CHUNK`] rays in
 /// parallel (the peer's threads pull 4096-ray chunks from a shared counter).
 pub fn pass(
@@ -174,6 +230,8 @@ pub fn pass(
             Out::Occ(o, f) => occ1(accel, *f, rays, o),
             Out::Hits8(o, f) => hits8(accel, *f, pr, pa, o),
             Out::Occ8(o, f) => occ8(accel, *f, pr, pa, o),
+            Out::Hits16(o, f) => hits16(accel, *f, pr, pa, o),
+            Out::Occ16(o, f) => occ16(accel, *f, pr, pa, o),
         }
         return;
     };
@@ -195,6 +253,15 @@ pub fn pass(
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
             .for_each(|(o, (r, a))| occ8(accel, *f, r, a, o)),
+        // (P is even: pairs never straddle two work items)
+        Out::Hits16(o, f) => o
+            .par_chunks_mut(P)
+            .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
+            .for_each(|(o, (r, a))| hits16(accel, *f, r, a, o)),
+        Out::Occ16(o, f) => o
+            .par_chunks_mut(P)
+            .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
+            .for_each(|(o, (r, a))| occ16(accel, *f, r, a, o)),
     })
 }
 
@@ -213,6 +280,8 @@ impl Out {
             (Engine::Wide, true) => Out::Occ(occ, occluded_wide1),
             (Engine::Hybrid, false) => Out::Hits8(hits8, intersect_hybrid8),
             (Engine::Hybrid, true) => Out::Occ8(occ8, occluded_hybrid8),
+            (Engine::Packet16, false) => Out::Hits16(hits8, intersect16),
+            (Engine::Packet16, true) => Out::Occ16(occ8, occluded16),
         }
     }
 
@@ -233,7 +302,7 @@ pub(super) fn results_of(out: &Out, n: usize) -> Results {
             occluded: o.clone(),
             ..Default::default()
         },
-        Out::Hits8(h, _) => {
+        Out::Hits8(h, _) | Out::Hits16(h, _) => {
             let hits: Vec<(u32, f32)> = h
                 .iter()
                 .flat_map(|p| {
@@ -246,7 +315,7 @@ pub(super) fn results_of(out: &Out, n: usize) -> Results {
                 .collect();
             results_of(&Out::Hits(hits, intersect1), n)
         }
-        Out::Occ8(o, _) => Results {
+        Out::Occ8(o, _) | Out::Occ16(o, _) => Results {
             occluded: o
                 .iter()
                 .flat_map(|b| (0..8).map(move |i| b >> i & 1 == 1))

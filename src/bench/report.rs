@@ -98,7 +98,7 @@ pub fn format_report(r: &Report) -> String {
     let fr = &r.framing;
     let _ = writeln!(
         s,
-        "whitted bench {} subdivide {}: {} vertices, {} triangles | threads {}, reps {} | {}",
+        "whitted bench {} subdivide {}: {} vertices, {} triangles | threads {}, reps {} | {} | {}",
         r.mesh.display(),
         r.subdivide,
         r.vertices,
@@ -109,6 +109,11 @@ pub fn format_report(r: &Report) -> String {
             "AVX2 build"
         } else {
             "no AVX2 in this build (f32x8 runs as two SSE halves)"
+        },
+        if crate::accel::packet16::available() {
+            "packet16 on AVX-512"
+        } else {
+            "no AVX-512 (packet16 runs as two packet8 calls)"
         }
     );
     let _ = writeln!(
@@ -340,6 +345,7 @@ pub fn report_json(r: &Report) -> serde_json::Value {
         "threads": r.threads,
         "reps": r.reps,
         "avx2": cfg!(target_feature = "avx2"),
+        "avx512": crate::accel::packet16::available(),
         "camera": {"canonical": fr.canonical, "eye": fr.eye, "look_at": fr.look, "light": fr.light,
                    "width": r.width, "height": r.height, "eps": fr.eps},
         "build": t(&r.build),
