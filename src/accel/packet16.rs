@@ -225,71 +225,70 @@ fn hit_box16(node: &super::Node, r: &Rays16, tfar: __m512, active: u16) -> (u16,
     )
 }
 
-/// `hit_triangle8` in 16 lanes: the lanes that hit the `j`-th triangle of `leaf` with
-/// `tnear < t < tfar`, and their `(t, b1, b2)`.
-#[target_feature(enable = "avx512f,avx512dq")]
-#[inline]
-fn hit_triangle16(
-    accel: &Accel,
-    leaf: &impl Leaf,
-    j: usize,
-    r: &Rays16,
-    tfar: __m512,
-    active: u16,
-    cull: bool,
-) -> (u16, __m512, __m512, __m512) {
-    let n = splat3(leaf.n(j));
-    let v0 = splat3(leaf.v0(j));
-    // plane hit: t = <v0 - p, n> / <d, n>
-    let dn = dot(r.d, n);
-    let mut mask = active;
-    // culling: skip back faces (<d, n> >= 0).
-    if cull {
-        mask &= !_mm512_cmp_ps_mask::<_CMP_GE_OQ>(dn, splat(0.0));
-        if mask == 0 {
-            return (0, dn, dn, dn);
+/// `hit_triangle8` in 16 lanes: the lanes of `active` that hit the `j`-th triangle of `leaf`
+/// with `tnear < t < tfar`, and their `(t, b1, b2)`. (A macro: as a function, which cannot be
+/// `#[inline(always)]` with `#[target_feature]`, LLVM kept it out of line, with its four
+/// results going through memory.)
+macro_rules! hit_triangle16 {
+    ($accel:expr, $leaf:expr, $j:expr, $r:expr, $tfar:expr, $active:expr, $cull:expr) => {
+        'tri: {
+            let (accel, leaf, j, r, tfar): (&Accel, _, usize, &Rays16, __m512) =
+                ($accel, $leaf, $j, $r, $tfar);
+            let n = splat3(leaf.n(j));
+            let v0 = splat3(leaf.v0(j));
+            // plane hit: t = <v0 - p, n> / <d, n>
+            let dn = dot(r.d, n);
+            let mut mask: u16 = $active;
+            // culling: skip back faces (<d, n> >= 0).
+            if $cull {
+                mask &= !_mm512_cmp_ps_mask::<_CMP_GE_OQ>(dn, splat(0.0));
+                if mask == 0 {
+                    break 'tri (0u16, dn, dn, dn);
+                }
+            }
+            let t = _mm512_div_ps(dot(sub3(v0, r.o), n), dn);
+            // depth test: NaN fails both comparisons and so misses.
+            mask = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(mask, t, r.tnear);
+            mask = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(mask, t, tfar);
+            if mask == 0 {
+                break 'tri (0, t, t, t);
+            }
+            // barycentric: signed sub-triangle areas over the whole, as linear forms of
+            // w = q - v0.
+            let q = V3 {
+                x: _mm512_add_ps(r.o.x, _mm512_mul_ps(r.d.x, t)),
+                y: _mm512_add_ps(r.o.y, _mm512_mul_ps(r.d.y, t)),
+                z: _mm512_add_ps(r.o.z, _mm512_mul_ps(r.d.z, t)),
+            };
+            let w = sub3(q, v0);
+            let b1 = dot(w, splat3(leaf.p1(j)));
+            let b2 = dot(w, splat3(leaf.p2(j)));
+            let b0 = _mm512_sub_ps(_mm512_sub_ps(splat(1.0), b1), b2);
+            // inside when no coordinate is negative; lanes within BARY_SAFE of an edge by
+            // the f64 edge signs, as hit_triangle1 does.
+            let s = _mm512_mul_ps(
+                splat(BARY_SAFE),
+                _mm512_div_ps(
+                    _mm512_mul_ps(r.dlen, splat(leaf.n_len(j))),
+                    _mm512_abs_ps(dn),
+                ),
+            );
+            let ns = _mm512_xor_ps(s, splat(-0.0));
+            let ge = |m: u16, a: __m512, b: __m512| _mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(m, a, b);
+            let sure = ge(ge(ge(mask, b0, s), b1, s), b2, s);
+            let near = ge(ge(ge(mask, b0, ns), b1, ns), b2, ns);
+            let mut hit = sure;
+            let mut unsure = near & !sure;
+            while unsure != 0 {
+                let lane = unsure.trailing_zeros() as usize;
+                unsure &= unsure - 1;
+                if inside_f64(accel, leaf.slot(j), r.o1[lane], r.d1[lane]) {
+                    hit |= 1 << lane;
+                }
+            }
+            (hit, t, b1, b2)
         }
-    }
-    let t = _mm512_div_ps(dot(sub3(v0, r.o), n), dn);
-    // depth test: NaN fails both comparisons and so misses.
-    mask = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(mask, t, r.tnear);
-    mask = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(mask, t, tfar);
-    if mask == 0 {
-        return (0, t, t, t);
-    }
-    // barycentric: signed sub-triangle areas over the whole, as linear forms of w = q - v0.
-    let q = V3 {
-        x: _mm512_add_ps(r.o.x, _mm512_mul_ps(r.d.x, t)),
-        y: _mm512_add_ps(r.o.y, _mm512_mul_ps(r.d.y, t)),
-        z: _mm512_add_ps(r.o.z, _mm512_mul_ps(r.d.z, t)),
     };
-    let w = sub3(q, v0);
-    let b1 = dot(w, splat3(leaf.p1(j)));
-    let b2 = dot(w, splat3(leaf.p2(j)));
-    let b0 = _mm512_sub_ps(_mm512_sub_ps(splat(1.0), b1), b2);
-    // inside when no coordinate is negative; lanes within BARY_SAFE of an edge by the f64
-    // edge signs, as hit_triangle1 does.
-    let s = _mm512_mul_ps(
-        splat(BARY_SAFE),
-        _mm512_div_ps(
-            _mm512_mul_ps(r.dlen, splat(leaf.n_len(j))),
-            _mm512_abs_ps(dn),
-        ),
-    );
-    let ns = _mm512_xor_ps(s, splat(-0.0));
-    let ge = |m: u16, a: __m512, b: __m512| _mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(m, a, b);
-    let sure = ge(ge(ge(mask, b0, s), b1, s), b2, s);
-    let near = ge(ge(ge(mask, b0, ns), b1, ns), b2, ns);
-    let mut hit = sure;
-    let mut unsure = near & !sure;
-    while unsure != 0 {
-        let lane = unsure.trailing_zeros() as usize;
-        unsure &= unsure - 1;
-        if inside_f64(accel, leaf.slot(j), r.o1[lane], r.d1[lane]) {
-            hit |= 1 << lane;
-        }
-    }
-    (hit, t, b1, b2)
 }
 
 /// `traverse8` (no switch) in 16 lanes: closest hits, and with `ANY_HIT` the occluded lanes.
@@ -332,7 +331,7 @@ fn traverse16<const ANY_HIT: bool>(
             ($leaf:expr) => {{
                 let leaf = $leaf;
                 for j in 0..leaf.len() {
-                    let (mask, t, b1, b2) = hit_triangle16(accel, &leaf, j, &r, tfar, here, cull);
+                    let (mask, t, b1, b2) = hit_triangle16!(accel, &leaf, j, &r, tfar, here, cull);
                     if mask == 0 {
                         continue;
                     }
