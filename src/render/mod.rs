@@ -237,7 +237,11 @@ pub fn render_rows(
                     return Vec::new(); // the render has failed; stop tracing
                 }
                 let pixels = match settings.engine {
-                    Engine::Auto | Engine::Packet | Engine::Wide | Engine::Hybrid => {
+                    Engine::Auto
+                    | Engine::Packet
+                    | Engine::Wide
+                    | Engine::Hybrid
+                    | Engine::Packet16 => {
                         wavefront::render_tile(world, settings, &offsets, x0, y0, &stats, ws);
                         std::mem::take(&mut ws.accum)
                     }
