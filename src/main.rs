@@ -93,8 +93,8 @@ struct TraceArgs {
     #[arg(long)]
     hits: PathBuf,
     /// auto (= packet), packet (intersect8), wide (intersect_wide1, the 8-wide tree), hybrid
-    /// (intersect_hybrid8), packet16 (intersect16, AVX-512) or scalar (intersect1); all write
-    /// the same bytes.
+    /// (intersect_hybrid8), packet16 (intersect16, AVX-512), hybrid16 (intersect_hybrid16) or
+    /// scalar (intersect1); all write the same bytes.
     #[arg(long, default_value = "auto")]
     engine: String,
     /// Skip back faces.
@@ -137,9 +137,9 @@ struct RenderArgs {
     /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
-    /// auto (wavefront renderer, fastest kernel per queue, default), packet, wide, hybrid or
-    /// packet16 (wavefront, that kernel for every queue; packet16 needs AVX-512, else it
-    /// traces as packet) or scalar (the recursive reference).
+    /// auto (wavefront renderer, fastest kernel per queue, default), packet, wide, hybrid,
+    /// packet16 or hybrid16 (wavefront, that kernel for every queue; the 16-ray kernels need
+    /// AVX-512, else they trace as packet and hybrid) or scalar (the recursive reference).
     #[arg(long, default_value = "auto")]
     engine: String,
     /// Print BVH build time, rays per queue, and time and Mrays/s per phase.
@@ -229,7 +229,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
     whitted::trace::Engine::from_name(name).ok_or_else(|| {
         Error::Usage(format!(
-            "unknown engine '{name}' (auto, packet, wide, hybrid, packet16, scalar)"
+            "unknown engine '{name}' (auto, packet, wide, hybrid, packet16, hybrid16, scalar)"
         ))
     })
 }

@@ -1,7 +1,8 @@
 //! Tracing bare ray batches (no shading) with either engine: `whitted trace-rays`, benches.
 
 use crate::accel::{
-    Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8, intersect16,
+    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide1, intersect1, intersect8,
+    intersect16,
 };
 use crate::packet::RayPacket8;
 use crate::ray::{Hit, Ray};
@@ -24,18 +25,22 @@ pub enum Engine {
     /// `intersect16` on packets of 16 consecutive rays over the binary tree (AVX-512; two
     /// `intersect8` calls on a CPU without it).
     Packet16,
+    /// `intersect_hybrid16`: 16-ray packets that hand their last few lanes to single-ray
+    /// traversal of the 8-wide tree (AVX-512; two `intersect_hybrid8` calls without it).
+    Hybrid16,
     /// `intersect1` ray by ray over the binary tree (the reference).
     Scalar,
 }
 
 impl Engine {
     /// Every engine, by name.
-    pub const ALL: [Engine; 6] = [
+    pub const ALL: [Engine; 7] = [
         Engine::Auto,
         Engine::Packet,
         Engine::Wide,
         Engine::Hybrid,
         Engine::Packet16,
+        Engine::Hybrid16,
         Engine::Scalar,
     ];
 
@@ -47,6 +52,7 @@ impl Engine {
             Engine::Wide => "wide",
             Engine::Hybrid => "hybrid",
             Engine::Packet16 => "packet16",
+            Engine::Hybrid16 => "hybrid16",
             Engine::Scalar => "scalar",
         }
     }
@@ -70,12 +76,17 @@ pub fn trace_rays(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool) -> Ve
                 Engine::Wide => {
                     out.extend(chunk.iter().map(|r| intersect_wide1(accel, r, cull)));
                 }
-                Engine::Packet16 => {
+                Engine::Packet16 | Engine::Hybrid16 => {
+                    let f = if engine == Engine::Hybrid16 {
+                        intersect_hybrid16
+                    } else {
+                        intersect16
+                    };
                     for group in chunk.chunks(16) {
                         let (lo, hi) = group.split_at(group.len().min(8));
                         let (p0, a0) = RayPacket8::from_fn(|i| lo.get(i).copied());
                         let (p1, a1) = RayPacket8::from_fn(|i| hi.get(i).copied());
-                        let hits = intersect16(accel, [&p0, &p1], [a0, a1], cull);
+                        let hits = f(accel, [&p0, &p1], [a0, a1], cull);
                         out.extend((0..group.len()).map(|i| hits[i / 8].lane(i % 8)));
                     }
                 }

@@ -1,5 +1,5 @@
 //! Every engine (packet8 and packet16 on the binary tree, wide1 and wide8 on the 8-wide
-//! tree, hybrid8 on both) held to the
+//! tree, hybrid8 and hybrid16 on both) held to the
 //! scalar reference bit for bit, the scalar kernel held to the literal
 //! f64 formula of SCENES.md §2, and the BVH held to brute force.
 //!
@@ -15,9 +15,9 @@ use glam::Vec3;
 use proptest::prelude::*;
 use whitted::accel::scalar::{intersect_brute1, literal_hit};
 use whitted::accel::{
-    Accel, BuildQuality, intersect_hybrid8, intersect_wide1, intersect_wide8, intersect1,
-    intersect8, intersect16, occluded_hybrid8, occluded_wide1, occluded_wide8, occluded1,
-    occluded8, occluded16,
+    Accel, BuildQuality, intersect_hybrid8, intersect_hybrid16, intersect_wide1, intersect_wide8,
+    intersect1, intersect8, intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1,
+    occluded_wide8, occluded1, occluded8, occluded16,
 };
 use whitted::io::load_mesh;
 use whitted::packet::RayPacket8;
@@ -135,8 +135,7 @@ fn check_packets(
         .collect();
     // packet16: packets 2j and 2j + 1 as one 16-ray packet (a last odd one beside itself
     // with no lane active)
-    let mut hits16 = Vec::new();
-    let mut occ16 = Vec::new();
+    let (mut hits16, mut occ16, mut hhits16, mut hocc16) = (vec![], vec![], vec![], vec![]);
     for pair in packets.chunks(2) {
         let (a, b) = (&pair[0], pair.get(1).unwrap_or(&pair[0]));
         let b_active = if pair.len() == 2 {
@@ -146,6 +145,18 @@ fn check_packets(
         };
         hits16.extend(intersect16(accel, [&a.0, &b.0], [a.1, b_active], cull));
         occ16.extend(occluded16(accel, [&a.0, &b.0], [a.1, b_active], cull));
+        hhits16.extend(intersect_hybrid16(
+            accel,
+            [&a.0, &b.0],
+            [a.1, b_active],
+            cull,
+        ));
+        hocc16.extend(occluded_hybrid16(
+            accel,
+            [&a.0, &b.0],
+            [a.1, b_active],
+            cull,
+        ));
     }
     for (k, chunk) in rays.chunks(8).enumerate() {
         let (packet, active) = packets[k];
@@ -167,6 +178,8 @@ fn check_packets(
                 prop_assert!(!simd::lane_set(hocc, i));
                 prop_assert_eq!(hits16[k].lane(i), None);
                 prop_assert!(!simd::lane_set(occ16[k], i));
+                prop_assert_eq!(hhits16[k].lane(i), None);
+                prop_assert!(!simd::lane_set(hocc16[k], i));
                 continue;
             }
             let ray = chunk[i];
@@ -205,6 +218,13 @@ fn check_packets(
                 i
             );
             prop_assert_eq!(simd::lane_set(occ16[k], i), scalar.is_some());
+            prop_assert_eq!(
+                bits_of(hhits16[k].lane(i)),
+                bits_of(scalar),
+                "hybrid16 lane {}",
+                i
+            );
+            prop_assert_eq!(simd::lane_set(hocc16[k], i), scalar.is_some());
             // BVH traversal equals brute force.
             prop_assert_eq!(
                 bits_of(scalar),
@@ -359,8 +379,9 @@ fn leaks_on(
         let (p0, a0) = RayPacket8::from_fn(|i| lo.get(i).copied());
         let (p1, a1) = RayPacket8::from_fn(|i| hi.get(i).copied());
         let h16 = intersect16(&accel, [&p0, &p1], [a0, a1], false);
+        let hh16 = intersect_hybrid16(&accel, [&p0, &p1], [a0, a1], false);
         for (i, ray) in pair.iter().enumerate() {
-            if h16[i / 8].lane(i % 8).is_none() {
+            if h16[i / 8].lane(i % 8).is_none() || hh16[i / 8].lane(i % 8).is_none() {
                 let brute = whitted::accel::scalar::intersect_brute1(&accel, ray, false);
                 eprintln!("packet16 leak: {ray:?} brute {brute:?}");
                 leaked += 1;

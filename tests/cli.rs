@@ -58,7 +58,9 @@ fn unrelated_environment_variables_change_nothing() {
 
 #[test]
 fn both_engines_and_exr_output() {
-    for engine in ["auto", "packet", "wide", "hybrid", "packet16", "scalar"] {
+    for engine in [
+        "auto", "packet", "wide", "hybrid", "packet16", "hybrid16", "scalar",
+    ] {
         let out = tmp(&format!("demo-{engine}.exr"));
         let r = whitted()
             .args([
@@ -114,7 +116,9 @@ fn trace_rays_writes_one_record_per_ray_and_engines_agree() {
     let input = tmp("rays.bin");
     std::fs::write(&input, whitted::io::rays::encode_rays(&rays)).unwrap();
     let mut outputs = Vec::new();
-    for engine in ["auto", "packet", "wide", "hybrid", "packet16", "scalar"] {
+    for engine in [
+        "auto", "packet", "wide", "hybrid", "packet16", "hybrid16", "scalar",
+    ] {
         let hits = tmp(&format!("hits-{engine}.bin"));
         let r = whitted()
             .arg("trace-rays")
@@ -172,7 +176,9 @@ fn bad_input_is_one_line_error_with_exit_code_2() {
     ];
     // inside a closed box whose walls both mirror and refract, 64 bounces: every sample's ray
     // tree doubles per bounce (2^65 rays); refused within the budget, by both engines
-    for engine in ["auto", "packet", "wide", "hybrid", "packet16", "scalar"] {
+    for engine in [
+        "auto", "packet", "wide", "hybrid", "packet16", "hybrid16", "scalar",
+    ] {
         let trap_args = [trap.display().to_string(), "-q".into(), "-o".into()];
         let out = tmp("trap.png").display().to_string();
         cases.push((

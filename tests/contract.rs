@@ -249,7 +249,13 @@ fn packet_and_scalar_engines_agree_on_every_scene_and_stage() {
                 let (a, sa) = render(&w, &s, &|_| {});
                 s.engine = Engine::Packet;
                 let (b, sb) = render(&w, &s, &|_| {});
-                for other in [Engine::Wide, Engine::Hybrid, Engine::Packet16, Engine::Auto] {
+                for other in [
+                    Engine::Wide,
+                    Engine::Hybrid,
+                    Engine::Packet16,
+                    Engine::Hybrid16,
+                    Engine::Auto,
+                ] {
                     s.engine = other;
                     let (c, sc) = render(&w, &s, &|_| {});
                     let bits = |i: &whitted::image::Image| {
@@ -457,6 +463,7 @@ fn total_internal_reflection_pairs_are_traced_once() {
         Engine::Wide,
         Engine::Hybrid,
         Engine::Packet16,
+        Engine::Hybrid16,
         Engine::Auto,
     ] {
         let (repeated, secondary, repeated_shadow, shadow) = count("refraction", engine);

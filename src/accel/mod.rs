@@ -13,7 +13,7 @@ pub mod wide1;
 
 pub use hybrid8::{intersect_hybrid8, occluded_hybrid8};
 pub use packet::{intersect8, occluded8};
-pub use packet16::{intersect16, occluded16};
+pub use packet16::{intersect_hybrid16, intersect16, occluded_hybrid16, occluded16};
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
 pub use wide::Bvh8;

@@ -1,21 +1,26 @@
-//! 16-ray packets on AVX-512: the packet engine's walk of the binary tree (`traverse8` with
-//! no switch) with 16 lanes in one 512-bit register, so each box and triangle test serves
-//! twice the rays for about the instructions of one 8-lane test. Embree traces its 16-wide
-//! packets the same way on these machines.
+//! 16-ray packets on AVX-512: the packet engine's walk of the binary tree (`traverse8`) with
+//! 16 lanes in one 512-bit register, so each box and triangle test serves twice the rays
+//! for about the instructions of one 8-lane test. Embree traces its 16-wide packets the same
+//! way on these machines. `packet16` never leaves the packet; `hybrid16` hands a node's
+//! lanes to single-ray traversal of the wide tree once at most [`SWITCH16`] remain, as
+//! `hybrid8` does.
 //!
 //! The build targets x86-64-v3 (AVX2), so these kernels are compiled for AVX-512 on their
 //! own (`#[target_feature]`) and chosen at run time ([`available`]); without AVX-512 the
-//! entry points trace the two halves with `intersect8` / `occluded8`. Either way every lane
-//! equals `intersect1` / `occluded1` bit for bit: each step is `hit_triangle8`'s IEEE
-//! operation in the same order (no FMA; `min` / `max` with the same operand order and NaN
-//! rule), boxes are `hit_box8`'s padded test, and near-edge lanes take the same f64 edge test.
+//! entry points trace the two halves with the 8-lane engines. Either way every lane equals
+//! `intersect1` / `occluded1` bit for bit: each step is `hit_triangle8`'s IEEE operation in
+//! the same order (no FMA; `min` / `max` with the same operand order and NaN rule), boxes
+//! are `hit_box8`'s padded test, and near-edge lanes take the same f64 edge test.
 
+use super::hybrid8::{intersect_hybrid8, occluded_hybrid8};
 use super::packet::{intersect8, occluded8};
 use super::scalar::{BARY_SAFE, Stack, inside_f64};
 use super::tri_soa::Leaf;
+use super::wide::NO_ENTRY;
+use super::wide1::{RayWide, STACK, stack_need, walk};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
-use crate::ray::Hit;
+use crate::ray::{Hit, Ray};
 use crate::simd::{self, M32x8};
 use std::arch::x86_64::*;
 
@@ -41,7 +46,7 @@ pub fn intersect16(
     // SAFETY: `available()` checked that the CPU has AVX-512 F and DQ, the only features
     // the kernel is compiled for beyond the crate's baseline.
     #[allow(unsafe_code)]
-    let (hits, _) = unsafe { traverse16::<false>(accel, rays, active, cull) };
+    let (hits, _) = unsafe { traverse16::<false, 0>(accel, rays, active, cull) };
     hits
 }
 
@@ -57,10 +62,55 @@ pub fn occluded16(
     }
     // SAFETY: as in `intersect16`.
     #[allow(unsafe_code)]
-    let (_, occ) = unsafe { traverse16::<true>(accel, rays, active, cull) };
+    let (_, occ) = unsafe { traverse16::<true, 0>(accel, rays, active, cull) };
+    halves(occ)
+}
+
+/// Hand a node's lanes to single-ray traversal when at most this many of 16 remain
+/// (`hybrid16`). Kitten incoherent rays (best of 5, one thread): 3 -> 7.78, 6 -> 7.88,
+/// 10 -> 7.62 Mrays/s, `hybrid8` 7.15; at 1.3M triangles `hybrid16` and `hybrid8` trace
+/// incoherent rays alike (2.78) and `wide1` faster (3.13).
+pub const SWITCH16: u32 = 6;
+
+/// Closest hits of two packets as one 16-ray hybrid packet: `packet16`'s walk while more
+/// than [`SWITCH16`] lanes share a node, then each remaining lane alone down the wide tree
+/// (`hybrid8` on both halves without AVX-512).
+pub fn intersect_hybrid16(
+    accel: &Accel,
+    rays: [&RayPacket8; 2],
+    active: [M32x8; 2],
+    cull: bool,
+) -> [HitPacket8; 2] {
+    if !available() {
+        return [0, 1].map(|h| intersect_hybrid8(accel, rays[h], active[h], cull));
+    }
+    // SAFETY: as in `intersect16`.
+    #[allow(unsafe_code)]
+    let (hits, _) = unsafe { traverse16::<false, SWITCH16>(accel, rays, active, cull) };
+    hits
+}
+
+/// Occluded lanes of two packets as one 16-ray hybrid packet (any hit).
+pub fn occluded_hybrid16(
+    accel: &Accel,
+    rays: [&RayPacket8; 2],
+    active: [M32x8; 2],
+    cull: bool,
+) -> [M32x8; 2] {
+    if !available() {
+        return [0, 1].map(|h| occluded_hybrid8(accel, rays[h], active[h], cull));
+    }
+    // SAFETY: as in `intersect16`.
+    #[allow(unsafe_code)]
+    let (_, occ) = unsafe { traverse16::<true, SWITCH16>(accel, rays, active, cull) };
+    halves(occ)
+}
+
+/// The two packets' masks of 16 lane bits.
+fn halves(bits: u16) -> [M32x8; 2] {
     [
-        simd::mask_from_bits(occ as u32 & 0xff),
-        simd::mask_from_bits(occ as u32 >> 8),
+        simd::mask_from_bits(bits as u32 & 0xff),
+        simd::mask_from_bits(bits as u32 >> 8),
     ]
 }
 
@@ -291,9 +341,11 @@ macro_rules! hit_triangle16 {
     };
 }
 
-/// `traverse8` (no switch) in 16 lanes: closest hits, and with `ANY_HIT` the occluded lanes.
+/// `traverse8` in 16 lanes: closest hits, and with `ANY_HIT` the occluded lanes. With
+/// `SWITCH > 0` (`hybrid16`) a node reached by at most `SWITCH` lanes that has a twin in the
+/// wide tree is walked by each of those lanes alone (`wide1::walk`).
 #[target_feature(enable = "avx512f,avx512dq")]
-fn traverse16<const ANY_HIT: bool>(
+fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
     accel: &Accel,
     rays: [&RayPacket8; 2],
     active: [M32x8; 2],
@@ -360,7 +412,56 @@ fn traverse16<const ANY_HIT: bool>(
             }};
         }
         let n = accel.nodes[node as usize];
-        if n.count > 0 {
+        let entry = if SWITCH > 0 {
+            accel.wide.entry[node as usize]
+        } else {
+            NO_ENTRY
+        };
+        if entry != NO_ENTRY && here.count_ones() <= SWITCH {
+            // switch: the few lanes here walk this subtree's wide twin one by one, from their
+            // current closest hit (as `hybrid8::hand_off`).
+            let mut tf = lanes16(tfar);
+            let mut lt: [u32; 16] = bytemuck::cast(tri);
+            let (mut lt_t, mut lb1, mut lb2) = (lanes16(t_hit), lanes16(b1_hit), lanes16(b2_hit));
+            let tn = lanes16(r.tnear);
+            let mut bits = here;
+            STACK.with_borrow_mut(|st| {
+                let need = stack_need(&accel.wide);
+                if st.len() < need {
+                    st.resize(need, (0, 0.0));
+                }
+                while bits != 0 {
+                    let i = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let ray = Ray::new(r.o1[i].into(), r.d1[i].into(), tn[i], tf[i]);
+                    let rw = RayWide::new(&ray);
+                    let Some(h) = walk::<ANY_HIT>(accel, &accel.wide, entry, &rw, tf[i], cull, st)
+                    else {
+                        continue;
+                    };
+                    if ANY_HIT {
+                        occluded |= 1 << i;
+                        active &= !(1 << i);
+                    } else if lt[i] == Hit::NONE_ID || h.t < lt_t[i] || h.tri < lt[i] {
+                        (lt[i], lt_t[i], lb1[i], lb2[i]) = (h.tri, h.t, h.b1, h.b2);
+                        tf[i] = h.t.next_up();
+                    }
+                }
+            });
+            if ANY_HIT {
+                if active == 0 {
+                    return (none, occluded);
+                }
+            } else {
+                tri = bytemuck::cast(lt);
+                (t_hit, b1_hit, b2_hit) = (
+                    bytemuck::cast(lt_t),
+                    bytemuck::cast(lb1),
+                    bytemuck::cast(lb2),
+                );
+                tfar = bytemuck::cast(tf);
+            }
+        } else if n.count > 0 {
             test_leaf!(accel.tris.leaf(n.first as usize, n.count as usize));
         } else {
             // ordered children: both boxes tested for the lanes here, the side nearer for

@@ -2,8 +2,9 @@
 
 use super::*;
 use crate::accel::{
-    Accel, intersect_hybrid8, intersect_wide1, intersect1, intersect8, intersect16,
-    occluded_hybrid8, occluded_wide1, occluded1, occluded8, occluded16,
+    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide1, intersect1, intersect8,
+    intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1, occluded1, occluded8,
+    occluded16,
 };
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
@@ -117,16 +118,20 @@ pub enum Engine {
     /// `intersect16` / `occluded16` on the binary tree, 16 consecutive rays (AVX-512; two
     /// `packet8` calls on a CPU without it).
     Packet16,
+    /// `intersect_hybrid16` / `occluded_hybrid16`: 16-ray packets that hand their last few
+    /// lanes to single-ray traversal of the wide tree (two `hybrid8` calls without AVX-512).
+    Hybrid16,
 }
 
 impl Engine {
     /// Every engine, in report order.
-    pub const ALL: [Engine; 5] = [
+    pub const ALL: [Engine; 6] = [
         Engine::Scalar,
         Engine::Packet,
         Engine::Wide,
         Engine::Hybrid,
         Engine::Packet16,
+        Engine::Hybrid16,
     ];
 
     /// The engine's key in tables and JSON.
@@ -137,13 +142,14 @@ impl Engine {
             Engine::Wide => "wide1",
             Engine::Hybrid => "hybrid8",
             Engine::Packet16 => "packet16",
+            Engine::Hybrid16 => "hybrid16",
         }
     }
 
     /// Packet engines are compared with Embree's 8- and 16-wide packets, single-ray ones
     /// with its single rays.
     pub fn packet(self) -> bool {
-        matches!(self, Engine::Packet | Engine::Hybrid | Engine::Packet16)
+        !matches!(self, Engine::Scalar | Engine::Wide)
     }
 }
 
@@ -282,6 +288,8 @@ impl Out {
             (Engine::Hybrid, true) => Out::Occ8(occ8, occluded_hybrid8),
             (Engine::Packet16, false) => Out::Hits16(hits8, intersect16),
             (Engine::Packet16, true) => Out::Occ16(occ8, occluded16),
+            (Engine::Hybrid16, false) => Out::Hits16(hits8, intersect_hybrid16),
+            (Engine::Hybrid16, true) => Out::Occ16(occ8, occluded_hybrid16),
         }
     }
 

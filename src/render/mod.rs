@@ -241,7 +241,8 @@ pub fn render_rows(
                     | Engine::Packet
                     | Engine::Wide
                     | Engine::Hybrid
-                    | Engine::Packet16 => {
+                    | Engine::Packet16
+                    | Engine::Hybrid16 => {
                         wavefront::render_tile(world, settings, &offsets, x0, y0, &stats, ws);
                         std::mem::take(&mut ws.accum)
                     }

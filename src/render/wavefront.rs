@@ -10,8 +10,8 @@
 use super::queues::{BinScratch, NO_TWIN, RayQueue, ShadowQueue};
 use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
 use crate::accel::{
-    Accel, intersect_hybrid8, intersect_wide8, intersect8, intersect16, occluded_hybrid8,
-    occluded_wide8, occluded8, occluded16,
+    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide8, intersect8, intersect16,
+    occluded_hybrid8, occluded_hybrid16, occluded_wide8, occluded8, occluded16,
 };
 use crate::camera::Camera;
 use crate::packet::RayPacket8;
@@ -50,6 +50,8 @@ pub enum Kernel {
     /// `intersect16` / `occluded16`: two packets as one of 16 rays (AVX-512; else two
     /// packet calls).
     Packet16,
+    /// `intersect_hybrid16` / `occluded_hybrid16`: two packets as one hybrid packet of 16.
+    Hybrid16,
 }
 
 /// One or two packets traced together (`Packet16` takes them as one; the other kernels
@@ -62,7 +64,7 @@ impl Kernel {
         match self {
             Kernel::Packet | Kernel::Packet16 => intersect8(accel, p, active, cull),
             Kernel::Wide => intersect_wide8(accel, p, active, cull),
-            Kernel::Hybrid => intersect_hybrid8(accel, p, active, cull),
+            Kernel::Hybrid | Kernel::Hybrid16 => intersect_hybrid8(accel, p, active, cull),
         }
     }
     #[inline]
@@ -70,7 +72,7 @@ impl Kernel {
         match self {
             Kernel::Packet | Kernel::Packet16 => occluded8(accel, p, active, cull),
             Kernel::Wide => occluded_wide8(accel, p, active, cull),
-            Kernel::Hybrid => occluded_hybrid8(accel, p, active, cull),
+            Kernel::Hybrid | Kernel::Hybrid16 => occluded_hybrid8(accel, p, active, cull),
         }
     }
     /// Closest hits of a pair (the second result is a miss packet when there is no second).
@@ -78,6 +80,9 @@ impl Kernel {
     fn intersect2(self, accel: &Accel, (a, b): &Pair, cull: bool) -> [HitPacket8; 2] {
         match (self, b) {
             (Kernel::Packet16, Some(b)) => intersect16(accel, [&a.0, &b.0], [a.1, b.1], cull),
+            (Kernel::Hybrid16, Some(b)) => {
+                intersect_hybrid16(accel, [&a.0, &b.0], [a.1, b.1], cull)
+            }
             (_, b) => [
                 self.intersect(accel, &a.0, a.1, cull),
                 b.map_or(HitPacket8::none(), |b| {
@@ -91,6 +96,7 @@ impl Kernel {
     fn occluded2(self, accel: &Accel, (a, b): &Pair, cull: bool) -> [M32x8; 2] {
         match (self, b) {
             (Kernel::Packet16, Some(b)) => occluded16(accel, [&a.0, &b.0], [a.1, b.1], cull),
+            (Kernel::Hybrid16, Some(b)) => occluded_hybrid16(accel, [&a.0, &b.0], [a.1, b.1], cull),
             (_, b) => [
                 self.occluded(accel, &a.0, a.1, cull),
                 b.map_or(simd::mask_from_bits(0), |b| {
@@ -166,6 +172,7 @@ impl Kernels {
             Engine::Wide => all(Kernel::Wide),
             Engine::Hybrid => all(Kernel::Hybrid),
             Engine::Packet16 => all(Kernel::Packet16),
+            Engine::Hybrid16 => all(Kernel::Hybrid16),
             Engine::Packet | Engine::Scalar => all(Kernel::Packet),
         }
     }
