@@ -275,6 +275,20 @@ fn hit_box16(node: &super::Node, r: &Rays16, tfar: __m512, active: u16) -> (u16,
     )
 }
 
+/// `f32::next_up` per lane, for the finite lanes (a hit's `t`; other lanes are not used):
+/// the bit pattern one step away from zero for positive values, one step towards zero for
+/// negative ones, the smallest subnormal for a zero of either sign.
+#[target_feature(enable = "avx512f,avx512dq")]
+#[inline]
+fn next_up(t: __m512) -> __m512 {
+    let bits = _mm512_castps_si512(t);
+    let pos = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, splat(0.0));
+    let neg = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, splat(0.0));
+    let one = _mm512_set1_epi32(1);
+    let up = _mm512_mask_sub_epi32(_mm512_mask_add_epi32(one, pos, bits, one), neg, bits, one);
+    _mm512_castsi512_ps(up)
+}
+
 /// `hit_triangle8` in 16 lanes: the lanes of `active` that hit the `j`-th triangle of `leaf`
 /// with `tnear < t < tfar`, and their `(t, b1, b2)`. (A macro: as a function, which cannot be
 /// `#[inline(always)]` with `#[target_feature]`, LLVM kept it out of line, with its four
@@ -406,8 +420,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                     t_hit = _mm512_mask_mov_ps(t_hit, take, t);
                     b1_hit = _mm512_mask_mov_ps(b1_hit, take, b1);
                     b2_hit = _mm512_mask_mov_ps(b2_hit, take, b2);
-                    let next_up: [f32; 16] = lanes16(t).map(f32::next_up);
-                    tfar = _mm512_mask_mov_ps(tfar, take, bytemuck::cast(next_up));
+                    tfar = _mm512_mask_mov_ps(tfar, take, next_up(t));
                 }
             }};
         }
@@ -535,6 +548,51 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
             if m != 0 {
                 (node, here) = (next, m);
                 break;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `next_up` in lanes is `f32::next_up` on every finite value (a hit's `t`), including
+    /// zeros of both signs, subnormals, negatives and the largest finite value.
+    #[test]
+    fn lane_next_up_equals_f32_next_up() {
+        if !available() {
+            eprintln!("no AVX-512 here: the 16-lane kernels are not run");
+            return;
+        }
+        let mut values = vec![
+            0.0f32,
+            -0.0,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MAX,
+            -f32::MAX,
+            1.0,
+            -1.0,
+        ];
+        let mut x = 0x1234_5678u32;
+        while values.len() < 4096 {
+            x = x.wrapping_mul(1664525).wrapping_add(1013904223);
+            let v = f32::from_bits(x);
+            if v.is_finite() {
+                values.push(v);
+            }
+        }
+        for chunk in values.chunks(16) {
+            let mut lanes = [0.0f32; 16];
+            lanes[..chunk.len()].copy_from_slice(chunk);
+            // SAFETY: the CPU has AVX-512 F and DQ (checked above).
+            #[allow(unsafe_code)]
+            let got = lanes16(unsafe { next_up(bytemuck::cast(lanes)) });
+            for (g, v) in got.iter().zip(lanes) {
+                assert_eq!(g.to_bits(), v.next_up().to_bits(), "{v:e}");
             }
         }
     }
