@@ -307,8 +307,7 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
                         hits.t = simd::select(take, t, hits.t);
                         hits.b1 = simd::select(take, b1, hits.b1);
                         hits.b2 = simd::select(take, b2, hits.b2);
-                        let next_up = simd::from_lanes(simd::lanes(t).map(f32::next_up));
-                        tfar = simd::select(take, next_up, tfar);
+                        tfar = simd::select(take, simd::next_up(t), tfar);
                     }
                 }};
             }
