@@ -127,7 +127,7 @@ pub fn next_up(t: F32x8) -> F32x8 {
     let pos: i32x8 = wide::bytemuck::cast(gt(t, splat(0.0)));
     let neg: i32x8 = wide::bytemuck::cast(lt(t, splat(0.0)));
     let stepped = bits - pos + neg;
-    wide::bytemuck::cast((pos | neg).blend(stepped, i32x8::splat(1)))
+    wide::bytemuck::cast((pos | neg).select(stepped, i32x8::splat(1)))
 }
 /// Per-lane square root (exact IEEE).
 #[inline(always)]
