@@ -271,6 +271,31 @@ impl Neg for Vec3x8 {
     }
 }
 
+/// 4096 finite floats for the `next_up` tests: both zeros, the smallest subnormals and
+/// normals of both signs, the largest finite values, and pseudo-random bit patterns.
+#[cfg(test)]
+pub(crate) fn finite_samples() -> Vec<f32> {
+    let mut values = vec![
+        0.0f32,
+        -0.0,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+        f32::from_bits(1),
+        -f32::from_bits(1),
+        f32::MAX,
+        -f32::MAX,
+    ];
+    let mut x = 0x1234_5678u32;
+    while values.len() < 4096 {
+        x = x.wrapping_mul(1664525).wrapping_add(1013904223);
+        let v = f32::from_bits(x);
+        if v.is_finite() {
+            values.push(v);
+        }
+    }
+    values
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,24 +304,7 @@ mod tests {
     /// signs, subnormals, negatives and the largest finite value.
     #[test]
     fn lane_next_up_equals_f32_next_up() {
-        let mut values = vec![
-            0.0f32,
-            -0.0,
-            f32::MIN_POSITIVE,
-            -f32::MIN_POSITIVE,
-            f32::from_bits(1),
-            -f32::from_bits(1),
-            f32::MAX,
-            -f32::MAX,
-        ];
-        let mut x = 0x1234_5678u32;
-        while values.len() < 4096 {
-            x = x.wrapping_mul(1664525).wrapping_add(1013904223);
-            let v = f32::from_bits(x);
-            if v.is_finite() {
-                values.push(v);
-            }
-        }
+        let values = finite_samples();
         for chunk in values.chunks(8) {
             let v: [f32; 8] = std::array::from_fn(|i| chunk[i]);
             for (g, v) in lanes(next_up(from_lanes(v))).iter().zip(v) {

@@ -33,6 +33,20 @@ pub fn available() -> bool {
     })
 }
 
+/// The AVX-512 walk when the CPU has AVX-512, else `None` (the caller's 8-lane fallback).
+#[inline(always)]
+fn run16<const ANY_HIT: bool, const SWITCH: u32>(
+    accel: &Accel,
+    rays: [&RayPacket8; 2],
+    active: [M32x8; 2],
+    cull: bool,
+) -> Option<([HitPacket8; 2], u16)> {
+    // SAFETY: `available()` checked that the CPU has AVX-512 F and DQ, the only features
+    // the kernel is compiled for beyond the crate's baseline.
+    #[allow(unsafe_code)]
+    available().then(|| unsafe { traverse16::<ANY_HIT, SWITCH>(accel, rays, active, cull) })
+}
+
 /// Closest hits of two packets traced as one 16-ray packet (lanes `0..8` from `rays[0]`).
 pub fn intersect16(
     accel: &Accel,
@@ -40,14 +54,10 @@ pub fn intersect16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [HitPacket8; 2] {
-    if !available() {
-        return [0, 1].map(|h| intersect8(accel, rays[h], active[h], cull));
-    }
-    // SAFETY: `available()` checked that the CPU has AVX-512 F and DQ, the only features
-    // the kernel is compiled for beyond the crate's baseline.
-    #[allow(unsafe_code)]
-    let (hits, _) = unsafe { traverse16::<false, 0>(accel, rays, active, cull) };
-    hits
+    run16::<false, 0>(accel, rays, active, cull).map_or_else(
+        || [0, 1].map(|h| intersect8(accel, rays[h], active[h], cull)),
+        |(hits, _)| hits,
+    )
 }
 
 /// Occluded lanes of two packets traced as one 16-ray packet (any hit).
@@ -57,19 +67,17 @@ pub fn occluded16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [M32x8; 2] {
-    if !available() {
-        return [0, 1].map(|h| occluded8(accel, rays[h], active[h], cull));
-    }
-    // SAFETY: as in `intersect16`.
-    #[allow(unsafe_code)]
-    let (_, occ) = unsafe { traverse16::<true, 0>(accel, rays, active, cull) };
-    halves(occ)
+    run16::<true, 0>(accel, rays, active, cull).map_or_else(
+        || [0, 1].map(|h| occluded8(accel, rays[h], active[h], cull)),
+        |(_, occ)| halves(occ),
+    )
 }
 
 /// Hand a node's lanes to single-ray traversal when at most this many of 16 remain
 /// (`hybrid16`). Kitten incoherent rays (best of 5, one thread): 3 -> 7.78, 6 -> 7.88,
 /// 10 -> 7.62 Mrays/s, `hybrid8` 7.15; at 1.3M triangles `hybrid16` and `hybrid8` trace
-/// incoherent rays alike (2.78) and `wide1` faster (3.13).
+/// incoherent rays alike (2.78) and `wide1` faster (3.13; switches of 10 and 14 and leaves
+/// read from the wide blocks did not change that).
 pub const SWITCH16: u32 = 6;
 
 /// Closest hits of two packets as one 16-ray hybrid packet: `packet16`'s walk while more
@@ -81,13 +89,10 @@ pub fn intersect_hybrid16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [HitPacket8; 2] {
-    if !available() {
-        return [0, 1].map(|h| intersect_hybrid8(accel, rays[h], active[h], cull));
-    }
-    // SAFETY: as in `intersect16`.
-    #[allow(unsafe_code)]
-    let (hits, _) = unsafe { traverse16::<false, SWITCH16>(accel, rays, active, cull) };
-    hits
+    run16::<false, SWITCH16>(accel, rays, active, cull).map_or_else(
+        || [0, 1].map(|h| intersect_hybrid8(accel, rays[h], active[h], cull)),
+        |(hits, _)| hits,
+    )
 }
 
 /// Occluded lanes of two packets as one 16-ray hybrid packet (any hit).
@@ -97,13 +102,10 @@ pub fn occluded_hybrid16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [M32x8; 2] {
-    if !available() {
-        return [0, 1].map(|h| occluded_hybrid8(accel, rays[h], active[h], cull));
-    }
-    // SAFETY: as in `intersect16`.
-    #[allow(unsafe_code)]
-    let (_, occ) = unsafe { traverse16::<true, SWITCH16>(accel, rays, active, cull) };
-    halves(occ)
+    run16::<true, SWITCH16>(accel, rays, active, cull).map_or_else(
+        || [0, 1].map(|h| occluded_hybrid8(accel, rays[h], active[h], cull)),
+        |(_, occ)| halves(occ),
+    )
 }
 
 /// The two packets' masks of 16 lane bits.
@@ -565,26 +567,7 @@ mod tests {
             eprintln!("no AVX-512 here: the 16-lane kernels are not run");
             return;
         }
-        let mut values = vec![
-            0.0f32,
-            -0.0,
-            f32::MIN_POSITIVE,
-            -f32::MIN_POSITIVE,
-            f32::from_bits(1),
-            -f32::from_bits(1),
-            f32::MAX,
-            -f32::MAX,
-            1.0,
-            -1.0,
-        ];
-        let mut x = 0x1234_5678u32;
-        while values.len() < 4096 {
-            x = x.wrapping_mul(1664525).wrapping_add(1013904223);
-            let v = f32::from_bits(x);
-            if v.is_finite() {
-                values.push(v);
-            }
-        }
+        let values = crate::simd::finite_samples();
         for chunk in values.chunks(16) {
             let mut lanes = [0.0f32; 16];
             lanes[..chunk.len()].copy_from_slice(chunk);
