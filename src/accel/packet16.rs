@@ -24,11 +24,13 @@ use crate::ray::{Hit, Ray};
 use crate::simd::{self, M32x8};
 use std::arch::x86_64::*;
 
-/// Whether this CPU runs the AVX-512 kernels (AVX-512 F and DQ), checked once.
+/// Whether the AVX-512 kernels run (the CPU has AVX-512 F and DQ, and `WHITTED_NO_AVX512` is
+/// not set: with it the 16-ray engines trace as on a CPU without AVX-512), checked once.
 pub fn available() -> bool {
     static HAVE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *HAVE.get_or_init(|| {
-        std::arch::is_x86_feature_detected!("avx512f")
+        std::env::var_os("WHITTED_NO_AVX512").is_none()
+            && std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512dq")
     })
 }

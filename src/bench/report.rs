@@ -113,7 +113,7 @@ pub fn format_report(r: &Report) -> String {
         if crate::accel::packet16::available() {
             "packet16 on AVX-512"
         } else {
-            "no AVX-512 (packet16 runs as two packet8 calls)"
+            "no AVX-512 (packet16 and hybrid16 run as two packet8 and hybrid8 calls)"
         }
     );
     let _ = writeln!(
