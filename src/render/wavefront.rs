@@ -54,10 +54,6 @@ pub enum Kernel {
     Hybrid16,
 }
 
-/// One or two packets traced together (`Packet16` takes them as one; the other kernels
-/// trace them one after the other).
-type Pair = ((RayPacket8, M32x8), Option<(RayPacket8, M32x8)>);
-
 impl Kernel {
     #[inline]
     fn intersect(self, accel: &Accel, p: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
@@ -75,60 +71,77 @@ impl Kernel {
             Kernel::Hybrid | Kernel::Hybrid16 => occluded_hybrid8(accel, p, active, cull),
         }
     }
-    /// Closest hits of a pair (the second result is a miss packet when there is no second).
-    #[inline]
-    fn intersect2(self, accel: &Accel, (a, b): &Pair, cull: bool) -> [HitPacket8; 2] {
-        match (self, b) {
-            (Kernel::Packet16, Some(b)) => intersect16(accel, [&a.0, &b.0], [a.1, b.1], cull),
-            (Kernel::Hybrid16, Some(b)) => {
-                intersect_hybrid16(accel, [&a.0, &b.0], [a.1, b.1], cull)
+    /// Closest hits of packets `0..n` (`packet(p)` builds the `p`-th), handed to
+    /// `out(p, hits)` in order: the 16-ray kernels take two packets at a time, the others
+    /// one (their loop as before the 16-ray kernels: a loop over pairs cost `phong`'s camera
+    /// phase 9% and its shadow phase 4%). Kept out of line: inlined into the tile loop it
+    /// cost `refraction`'s shade phase 20% (code of the shading fell out of line).
+    #[inline(never)]
+    fn intersect_all(
+        self,
+        accel: &Accel,
+        n: usize,
+        packet: impl Fn(usize) -> (RayPacket8, M32x8),
+        cull: bool,
+        mut out: impl FnMut(usize, HitPacket8),
+    ) {
+        let f = match self {
+            Kernel::Packet16 => intersect16,
+            Kernel::Hybrid16 => intersect_hybrid16,
+            _ => {
+                for p in 0..n {
+                    let (q, m) = packet(p);
+                    out(p, self.intersect(accel, &q, m, cull));
+                }
+                return;
             }
-            (_, b) => [
-                self.intersect(accel, &a.0, a.1, cull),
-                b.map_or(HitPacket8::none(), |b| {
-                    self.intersect(accel, &b.0, b.1, cull)
-                }),
-            ],
+        };
+        for p in (0..n).step_by(2) {
+            let a = packet(p);
+            if p + 1 < n {
+                let b = packet(p + 1);
+                let [h0, h1] = f(accel, [&a.0, &b.0], [a.1, b.1], cull);
+                out(p, h0);
+                out(p + 1, h1);
+            } else {
+                out(p, self.intersect(accel, &a.0, a.1, cull));
+            }
         }
     }
-    /// Occluded lanes of a pair (none in the second when there is no second).
-    #[inline]
-    fn occluded2(self, accel: &Accel, (a, b): &Pair, cull: bool) -> [M32x8; 2] {
-        match (self, b) {
-            (Kernel::Packet16, Some(b)) => occluded16(accel, [&a.0, &b.0], [a.1, b.1], cull),
-            (Kernel::Hybrid16, Some(b)) => occluded_hybrid16(accel, [&a.0, &b.0], [a.1, b.1], cull),
-            (_, b) => [
-                self.occluded(accel, &a.0, a.1, cull),
-                b.map_or(simd::mask_from_bits(0), |b| {
-                    self.occluded(accel, &b.0, b.1, cull)
-                }),
-            ],
+    /// Occluded lanes of packets `0..n`, handed to `out(p, occluded)` in order (as
+    /// [`Kernel::intersect_all`]).
+    #[inline(never)]
+    fn occluded_all(
+        self,
+        accel: &Accel,
+        n: usize,
+        packet: impl Fn(usize) -> (RayPacket8, M32x8),
+        cull: bool,
+        mut out: impl FnMut(usize, M32x8),
+    ) {
+        let f = match self {
+            Kernel::Packet16 => occluded16,
+            Kernel::Hybrid16 => occluded_hybrid16,
+            _ => {
+                for p in 0..n {
+                    let (q, m) = packet(p);
+                    out(p, self.occluded(accel, &q, m, cull));
+                }
+                return;
+            }
+        };
+        for p in (0..n).step_by(2) {
+            let a = packet(p);
+            if p + 1 < n {
+                let b = packet(p + 1);
+                let [o0, o1] = f(accel, [&a.0, &b.0], [a.1, b.1], cull);
+                out(p, o0);
+                out(p + 1, o1);
+            } else {
+                out(p, self.occluded(accel, &a.0, a.1, cull));
+            }
         }
     }
-}
-
-/// The packets of `len` entries, two at a time (`packet(start)` gives the one at `start`).
-fn pairs<'a>(
-    len: usize,
-    packet: impl Fn(usize) -> (RayPacket8, M32x8) + 'a,
-) -> impl Iterator<Item = Pair> + 'a {
-    (0..len).step_by(2 * LANES).map(move |start| {
-        let b = start + LANES;
-        (packet(start), (b < len).then(|| packet(b)))
-    })
-}
-
-/// `packet` of the entries `group` lists (a queue's originals without their twins), two at a
-/// time, with the lists of each pair's lanes.
-fn unique_pairs<'a>(
-    unique: &'a [u32],
-    ray: impl Fn(usize) -> crate::ray::Ray + 'a,
-) -> impl Iterator<Item = (Pair, &'a [u32])> + 'a {
-    unique.chunks(2 * LANES).map(move |group| {
-        let one = |g: &[u32]| RayPacket8::from_fn(|i| g.get(i).map(|&j| ray(j as usize)));
-        let (lo, hi) = group.split_at(group.len().min(LANES));
-        ((one(lo), (!hi.is_empty()).then(|| one(hi))), group)
-    })
 }
 
 /// The kernel of each queue.
@@ -374,23 +387,24 @@ fn intersect_closest(
 ) {
     let cull = world.scene.cull_backfaces;
     out.clear();
+    let n = rays.len().div_ceil(LANES);
     if rays.twins.count() == 0 {
-        for pair in pairs(rays.len(), |start| rays.packet(start)) {
-            let h = kernel.intersect2(&world.accel, &pair, cull);
-            out.extend(&h[..1 + pair.1.is_some() as usize]);
-        }
+        let packet = |p: usize| rays.packet(p * LANES);
+        kernel.intersect_all(&world.accel, n, packet, cull, |_, h| out.push(h));
         return;
     }
-    out.resize(rays.len().div_ceil(LANES), HitPacket8::none());
+    out.resize(n, HitPacket8::none());
     rays.twins.originals(rays.len(), unique);
     let at = |j: u32| (j as usize / LANES, j as usize % LANES);
-    for (pair, group) in unique_pairs(unique, |j| rays.ray(j)) {
-        let h = kernel.intersect2(&world.accel, &pair, cull);
-        for (i, &j) in group.iter().enumerate() {
-            let (p, lane) = at(j);
-            out[p].set_lane(lane, h[i / LANES].lane(i % LANES));
+    let group = |p: usize| &unique[p * LANES..((p + 1) * LANES).min(unique.len())];
+    let packet = |p: usize| RayPacket8::from_fn(|i| group(p).get(i).map(|&j| rays.ray(j as usize)));
+    let groups = unique.len().div_ceil(LANES);
+    kernel.intersect_all(&world.accel, groups, packet, cull, |p, h| {
+        for (i, &j) in group(p).iter().enumerate() {
+            let (q, lane) = at(j);
+            out[q].set_lane(lane, h.lane(i));
         }
-    }
+    });
     // (an original comes before its twins, and may be a twin itself)
     for j in 0..rays.len() {
         let t = rays.twins.get(j);
@@ -560,13 +574,16 @@ fn trace_shadow_rays(
         occluded.clear();
         occluded.resize(shadows.len(), false);
         shadows.twins.originals(shadows.len(), unique);
-        for (pair, group) in unique_pairs(unique, |j| shadows.ray(j)) {
-            let [h0, h1] = kernel.occluded2(&world.accel, &pair, cull);
-            let hit = simd::bitmask(h0) | simd::bitmask(h1) << LANES;
-            for (i, &j) in group.iter().enumerate() {
+        let group = |p: usize| &unique[p * LANES..((p + 1) * LANES).min(unique.len())];
+        let packet =
+            |p: usize| RayPacket8::from_fn(|i| group(p).get(i).map(|&j| shadows.ray(j as usize)));
+        let groups = unique.len().div_ceil(LANES);
+        kernel.occluded_all(&world.accel, groups, packet, cull, |p, o| {
+            let hit = simd::bitmask(o);
+            for (i, &j) in group(p).iter().enumerate() {
                 occluded[j as usize] = hit >> i & 1 == 1;
             }
-        }
+        });
         for j in 0..shadows.len() {
             let t = shadows.twins.get(j);
             if t != NO_TWIN {
@@ -578,17 +595,15 @@ fn trace_shadow_rays(
         }
         return;
     }
-    for (k, pair) in pairs(shadows.len(), |start| shadows.packet(start)).enumerate() {
-        let occluded = kernel.occluded2(&world.accel, &pair, cull);
-        let halves = [Some(pair.0), pair.1];
-        for (h, (half, occluded)) in halves.iter().zip(occluded).enumerate() {
-            let Some((_, active)) = half else { continue };
-            let start = (2 * k + h) * LANES;
-            let visible = simd::bitmask(*active) & !simd::bitmask(occluded);
-            for i in (0..LANES).filter(|&i| visible >> i & 1 == 1) {
-                let j = start + i;
-                accum[shadows.pixel[j] as usize] += shadows.contribution(j);
-            }
+    let n = shadows.len().div_ceil(LANES);
+    let packet = |p: usize| shadows.packet(p * LANES);
+    kernel.occluded_all(&world.accel, n, packet, cull, |p, occluded| {
+        let start = p * LANES;
+        let active = (1u32 << (shadows.len() - start).min(LANES)) - 1;
+        let visible = active & !simd::bitmask(occluded);
+        for i in (0..LANES).filter(|&i| visible >> i & 1 == 1) {
+            let j = start + i;
+            accum[shadows.pixel[j] as usize] += shadows.contribution(j);
         }
-    }
+    });
 }
