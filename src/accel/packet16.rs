@@ -134,6 +134,7 @@ fn join(a: [f32; 8], b: [f32; 8]) -> __m512 {
     bytemuck::cast(v)
 }
 
+/// The 16 lanes as an array.
 fn lanes16(v: __m512) -> [f32; 16] {
     bytemuck::cast(v)
 }
@@ -165,7 +166,7 @@ fn sub3(a: V3, b: V3) -> V3 {
     }
 }
 
-/// `x a.x + y b.y + z b.z` in `Vec3x8::dot`'s order: `(x + y) + z`.
+/// `a.x b.x + a.y b.y + a.z b.z` in `Vec3x8::dot`'s order: `(x + y) + z`.
 #[target_feature(enable = "avx512f,avx512dq")]
 #[inline]
 fn dot(a: V3, b: V3) -> __m512 {
@@ -192,6 +193,8 @@ struct Rays16 {
     d1: [[f32; 3]; 16],
 }
 
+/// The two packets as one (`safe_inv` and `|d|` per lane as `traverse8` computes them), and
+/// their `tfar`.
 #[target_feature(enable = "avx512f,avx512dq")]
 #[inline]
 fn rays16(rays: [&RayPacket8; 2]) -> (Rays16, __m512) {
