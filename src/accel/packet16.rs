@@ -188,7 +188,9 @@ struct Rays16 {
     octant: Option<[bool; 3]>,
     tnear: __m512,
     dlen: __m512,
-    /// Origins and directions per lane (for the f64 edge test).
+    /// `tnear` per lane (for the single-ray walks).
+    tnear1: [f32; 16],
+    /// Origins and directions per lane (for the f64 edge test and the single-ray walks).
     o1: [[f32; 3]; 16],
     d1: [[f32; 3]; 16],
 }
@@ -227,6 +229,7 @@ fn rays16(rays: [&RayPacket8; 2]) -> (Rays16, __m512) {
         },
         octant: None,
         tnear: join(simd::lanes(a.tnear), simd::lanes(b.tnear)),
+        tnear1: std::array::from_fn(|i| simd::lanes(rays[i / 8].tnear)[i % 8]),
         dlen: _mm512_sqrt_ps(dot(d, d)),
         o1: std::array::from_fn(|i| lane(&oa, &ob, i)),
         d1: std::array::from_fn(|i| lane(&da, &db, i)),
@@ -394,6 +397,8 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
     // entries: a node and the lanes that met its box when it was pushed.
     let mut stack: Stack<(u32, u16), 64> = Stack::new();
     let mut node = 0u32;
+    // hybrid: each lane's splat for the single-ray walks, made at its first hand-off
+    let mut walkers: [Option<RayWide>; 16] = [None; 16];
     let (mut here, ..) = hit_box16(&accel.nodes[0], &r, tfar, active);
     if here == 0 {
         return (none, 0);
@@ -440,10 +445,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
         if entry != NO_ENTRY && here.count_ones() <= SWITCH {
             // switch: the few lanes here walk this subtree's wide twin one by one, from their
             // current closest hit (as `hybrid8::hand_off`).
-            let mut tf = lanes16(tfar);
-            let mut lt: [u32; 16] = bytemuck::cast(tri);
-            let (mut lt_t, mut lb1, mut lb2) = (lanes16(t_hit), lanes16(b1_hit), lanes16(b2_hit));
-            let tn = lanes16(r.tnear);
+            let tf = lanes16(tfar);
             let mut bits = here;
             STACK.with_borrow_mut(|st| {
                 let need = stack_need(&accel.wide);
@@ -453,33 +455,40 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                 while bits != 0 {
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    let ray = Ray::new(r.o1[i].into(), r.d1[i].into(), tn[i], tf[i]);
-                    let rw = RayWide::new(&ray);
-                    let Some(h) = walk::<ANY_HIT>(accel, &accel.wide, entry, &rw, tf[i], cull, st)
+                    // (each lane's splat built once per packet)
+                    let rw = walkers[i].get_or_insert_with(|| {
+                        RayWide::new(&Ray::new(
+                            r.o1[i].into(),
+                            r.d1[i].into(),
+                            r.tnear1[i],
+                            f32::INFINITY,
+                        ))
+                    });
+                    let Some(h) = walk::<ANY_HIT>(accel, &accel.wide, entry, rw, tf[i], cull, st)
                     else {
                         continue;
                     };
+                    let lane = 1u16 << i;
                     if ANY_HIT {
-                        occluded |= 1 << i;
-                        active &= !(1 << i);
-                    } else if lt[i] == Hit::NONE_ID || h.t < lt_t[i] || h.tri < lt[i] {
-                        (lt[i], lt_t[i], lb1[i], lb2[i]) = (h.tri, h.t, h.b1, h.b2);
-                        tf[i] = h.t.next_up();
+                        occluded |= lane;
+                        active &= !lane;
+                        continue;
+                    }
+                    // record hit: found below the lane's limit, so nearer, or as near with a
+                    // lower index (as `hybrid8::HitLanes::take`)
+                    let (old_tri, old_t) =
+                        (bytemuck::cast::<_, [u32; 16]>(tri)[i], lanes16(t_hit)[i]);
+                    if old_tri == Hit::NONE_ID || h.t < old_t || h.tri < old_tri {
+                        tri = _mm512_mask_set1_epi32(tri, lane, h.tri as i32);
+                        t_hit = _mm512_mask_mov_ps(t_hit, lane, splat(h.t));
+                        b1_hit = _mm512_mask_mov_ps(b1_hit, lane, splat(h.b1));
+                        b2_hit = _mm512_mask_mov_ps(b2_hit, lane, splat(h.b2));
+                        tfar = _mm512_mask_mov_ps(tfar, lane, splat(h.t.next_up()));
                     }
                 }
             });
-            if ANY_HIT {
-                if active == 0 {
-                    return (none, occluded);
-                }
-            } else {
-                tri = bytemuck::cast(lt);
-                (t_hit, b1_hit, b2_hit) = (
-                    bytemuck::cast(lt_t),
-                    bytemuck::cast(lb1),
-                    bytemuck::cast(lb2),
-                );
-                tfar = bytemuck::cast(tf);
+            if ANY_HIT && active == 0 {
+                return (none, occluded);
             }
         } else if n.count > 0 {
             test_leaf!(accel.tris.leaf(n.first as usize, n.count as usize));
