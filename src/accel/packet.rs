@@ -76,12 +76,12 @@ pub fn hit_triangle8(
     (hit, t, b1, b2)
 }
 
-/// A leaf read from its wide block: `[field][axis][lane]` floats (n, v0, p1, p2), `|n|` per
-/// lane ([`TriBlock8::n_len`], the float `TriangleSoa` stores), the slots.
+/// A leaf read from its wide block: the block itself (one pointer; each field's lane `j` at a
+/// fixed offset from it), `|n|` per lane ([`TriBlock8::n_len`], the float `TriangleSoa`
+/// stores) and the number of triangles.
 pub struct BlockLeaf<'a> {
-    f: [[&'a [f32; 8]; 3]; 4],
+    block: &'a TriBlock8,
     n_len: [f32; 8],
-    slot: &'a [u32; 8],
     len: usize,
 }
 
@@ -90,17 +90,15 @@ impl<'a> BlockLeaf<'a> {
     #[inline(always)]
     pub fn new(block: &'a TriBlock8, len: u32) -> BlockLeaf<'a> {
         BlockLeaf {
-            f: [&block.n, &block.v0, &block.p1, &block.p2]
-                .map(|v| [&v.x, &v.y, &v.z].map(wide::bytemuck::cast_ref)),
+            block,
             n_len: simd::lanes(block.n_len()),
-            slot: &block.slot,
             len: (len as usize).min(8),
         }
     }
     #[inline(always)]
-    fn get(&self, field: usize, j: usize) -> [f32; 3] {
-        let f = &self.f[field];
-        [f[0][j], f[1][j], f[2][j]]
+    fn get(v: &Vec3x8, j: usize) -> [f32; 3] {
+        let lane = |c: &F32x8| wide::bytemuck::cast_ref::<F32x8, [f32; 8]>(c)[j];
+        [lane(&v.x), lane(&v.y), lane(&v.z)]
     }
 }
 
@@ -111,19 +109,19 @@ impl Leaf for BlockLeaf<'_> {
     }
     #[inline(always)]
     fn n(&self, j: usize) -> [f32; 3] {
-        self.get(0, j)
+        Self::get(&self.block.n, j)
     }
     #[inline(always)]
     fn v0(&self, j: usize) -> [f32; 3] {
-        self.get(1, j)
+        Self::get(&self.block.v0, j)
     }
     #[inline(always)]
     fn p1(&self, j: usize) -> [f32; 3] {
-        self.get(2, j)
+        Self::get(&self.block.p1, j)
     }
     #[inline(always)]
     fn p2(&self, j: usize) -> [f32; 3] {
-        self.get(3, j)
+        Self::get(&self.block.p2, j)
     }
     #[inline(always)]
     fn n_len(&self, j: usize) -> f32 {
@@ -131,7 +129,7 @@ impl Leaf for BlockLeaf<'_> {
     }
     #[inline(always)]
     fn slot(&self, j: usize) -> usize {
-        self.slot[j] as usize
+        self.block.slot[j] as usize
     }
 }
 
