@@ -83,30 +83,15 @@ impl Kernel {
         n: usize,
         packet: impl Fn(usize) -> (RayPacket8, M32x8),
         cull: bool,
-        mut out: impl FnMut(usize, HitPacket8),
+        out: impl FnMut(usize, HitPacket8),
     ) {
-        let f = match self {
-            Kernel::Packet16 => intersect16,
-            Kernel::Hybrid16 => intersect_hybrid16,
-            _ => {
-                for p in 0..n {
-                    let (q, m) = packet(p);
-                    out(p, self.intersect(accel, &q, m, cull));
-                }
-                return;
-            }
+        let two: Option<Pair16<HitPacket8>> = match self {
+            Kernel::Packet16 => Some(intersect16),
+            Kernel::Hybrid16 => Some(intersect_hybrid16),
+            _ => None,
         };
-        for p in (0..n).step_by(2) {
-            let a = packet(p);
-            if p + 1 < n {
-                let b = packet(p + 1);
-                let [h0, h1] = f(accel, [&a.0, &b.0], [a.1, b.1], cull);
-                out(p, h0);
-                out(p + 1, h1);
-            } else {
-                out(p, self.intersect(accel, &a.0, a.1, cull));
-            }
-        }
+        let one = |q: &RayPacket8, m| self.intersect(accel, q, m, cull);
+        each_packet(accel, cull, n, packet, one, two, out);
     }
     /// Occluded lanes of packets `0..n`, handed to `out(p, occluded)` in order (as
     /// [`Kernel::intersect_all`]).
@@ -117,29 +102,49 @@ impl Kernel {
         n: usize,
         packet: impl Fn(usize) -> (RayPacket8, M32x8),
         cull: bool,
-        mut out: impl FnMut(usize, M32x8),
+        out: impl FnMut(usize, M32x8),
     ) {
-        let f = match self {
-            Kernel::Packet16 => occluded16,
-            Kernel::Hybrid16 => occluded_hybrid16,
-            _ => {
-                for p in 0..n {
-                    let (q, m) = packet(p);
-                    out(p, self.occluded(accel, &q, m, cull));
-                }
-                return;
-            }
+        let two: Option<Pair16<M32x8>> = match self {
+            Kernel::Packet16 => Some(occluded16),
+            Kernel::Hybrid16 => Some(occluded_hybrid16),
+            _ => None,
         };
-        for p in (0..n).step_by(2) {
-            let a = packet(p);
-            if p + 1 < n {
-                let b = packet(p + 1);
-                let [o0, o1] = f(accel, [&a.0, &b.0], [a.1, b.1], cull);
-                out(p, o0);
-                out(p + 1, o1);
-            } else {
-                out(p, self.occluded(accel, &a.0, a.1, cull));
-            }
+        let one = |q: &RayPacket8, m| self.occluded(accel, q, m, cull);
+        each_packet(accel, cull, n, packet, one, two, out);
+    }
+}
+
+/// A 16-ray kernel on two packets of 8 (`intersect16`, `occluded_hybrid16`, ...).
+type Pair16<T> = fn(&Accel, [&RayPacket8; 2], [M32x8; 2], bool) -> [T; 2];
+
+/// Packets `0..n` (`packet(p)` builds the `p`-th) through `one`, or two at a time through
+/// `two` when given (a last odd packet through `one`), results to `out(p, r)` in order.
+#[inline(always)]
+fn each_packet<T>(
+    accel: &Accel,
+    cull: bool,
+    n: usize,
+    packet: impl Fn(usize) -> (RayPacket8, M32x8),
+    one: impl Fn(&RayPacket8, M32x8) -> T,
+    two: Option<Pair16<T>>,
+    mut out: impl FnMut(usize, T),
+) {
+    let Some(two) = two else {
+        for p in 0..n {
+            let (q, m) = packet(p);
+            out(p, one(&q, m));
+        }
+        return;
+    };
+    for p in (0..n).step_by(2) {
+        let a = packet(p);
+        if p + 1 < n {
+            let b = packet(p + 1);
+            let [r0, r1] = two(accel, [&a.0, &b.0], [a.1, b.1], cull);
+            out(p, r0);
+            out(p + 1, r1);
+        } else {
+            out(p, one(&a.0, a.1));
         }
     }
 }
