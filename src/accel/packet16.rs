@@ -188,8 +188,6 @@ struct Rays16 {
     octant: Option<[bool; 3]>,
     tnear: __m512,
     dlen: __m512,
-    /// `tnear` per lane (for the single-ray walks).
-    tnear1: [f32; 16],
     /// Origins and directions per lane (for the f64 edge test and the single-ray walks).
     o1: [[f32; 3]; 16],
     d1: [[f32; 3]; 16],
@@ -229,7 +227,6 @@ fn rays16(rays: [&RayPacket8; 2]) -> (Rays16, __m512) {
         },
         octant: None,
         tnear: join(simd::lanes(a.tnear), simd::lanes(b.tnear)),
-        tnear1: std::array::from_fn(|i| simd::lanes(rays[i / 8].tnear)[i % 8]),
         dlen: _mm512_sqrt_ps(dot(d, d)),
         o1: std::array::from_fn(|i| lane(&oa, &ob, i)),
         d1: std::array::from_fn(|i| lane(&da, &db, i)),
@@ -460,7 +457,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                         RayWide::new(&Ray::new(
                             r.o1[i].into(),
                             r.d1[i].into(),
-                            r.tnear1[i],
+                            lanes16(r.tnear)[i],
                             f32::INFINITY,
                         ))
                     });
