@@ -56,12 +56,11 @@ pub struct Node8 {
 }
 
 /// Up to 8 triangles in lanes, as `hit_triangle1` reads them (`TriangleSoa`'s fields), then
-/// their ids: 448 bytes, seven cache lines. A test reads the first three (`n`, `v0`: the
-/// depth test), the next three when some lane passes it, and the ids' line only for a hit or
-/// a near-edge lane; `|n|` is recomputed from `n` when a lane passes the depth test
-/// (`TriangleSoa::n_len` is `n.length()`, the same float). Unused lanes have `n = 0` (and
-/// `v0 = p1 = p2 = 0`): their plane test is `0 / 0 = NaN`, which fails the depth test, so
-/// they never hit (culled too: `<d, 0> >= 0`).
+/// their ids: 448 bytes, seven cache lines. A single-ray test reads the first six (`n`, `v0`
+/// for the depth test, then `p1`, `p2`), and the ids' line only for a hit or a near-edge
+/// lane; `|n|` is recomputed from `n` (`TriangleSoa::n_len` is `n.length()`, the same
+/// float). Unused lanes have `n = 0` (and `v0 = p1 = p2 = 0`): their plane test is
+/// `0 / 0 = NaN`, which fails the depth test, so they never hit (culled too: `<d, 0> >= 0`).
 ///
 /// The ids sit in the block's last line rather than in an array of their own: at 1.3M
 /// triangles, where the blocks come from L3, `wide1` ran 1.02-1.06x on hits, shadow and
