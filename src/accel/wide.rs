@@ -299,6 +299,13 @@ impl Node8 {
         self.order[0] |= ((1u32 << n) - 1) << 24;
     }
 
+    /// Bit `i` set when child slot `i` holds a leaf (unused slots hold 0, not leaves).
+    #[inline(always)]
+    pub fn leaves(&self) -> u32 {
+        let refs: F32x8 = wide::bytemuck::cast(self.child);
+        crate::simd::bitmask(refs)
+    }
+
     /// Bit `i` set when child slot `i` is in use.
     #[inline(always)]
     pub fn valid(&self) -> u32 {

@@ -218,6 +218,13 @@ fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> 
 /// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
 /// nearest hit with `tnear < t < tfar`, or with `ANY_HIT` the first. `stack` holds at least
 /// [`stack_need`] entries.
+///
+/// A node's hit leaf children are tested at the node, before its inner children are
+/// descended into or pushed: the walk then only ever steps to nodes (no leaf-or-node branch
+/// after each step, which went either way on 2.5 steps of an incoherent ray, and no stack
+/// entries for leaves). Closest hit: a leaf is skipped when a hit found at the same node
+/// already lies before its box. Any hit: the leaves the ray starts in come last
+/// (`ORIGIN_LAST`).
 #[inline(always)]
 pub(super) fn walk<const ANY_HIT: bool>(
     accel: &Accel,
@@ -229,50 +236,96 @@ pub(super) fn walk<const ANY_HIT: bool>(
     stack: &mut [(u32, f32)],
 ) -> Option<Hit> {
     let mut best: Option<Hit> = None;
+    // the blocks of leaf `leaf` against the ray: the walk's answer when it is found (any
+    // hit), else the best hit so far and the limit updated.
+    macro_rules! test_leaf {
+        ($leaf:expr) => {
+            let (first, count) = leaf_blocks($leaf);
+            for block in first..first + count {
+                if let Some(h) = hit_block1::<ANY_HIT>(accel, block, r, tfar, cull) {
+                    if ANY_HIT {
+                        return Some(h);
+                    }
+                    // record hit: as in intersect1, the new limit is the next float above
+                    // t and an exact tie keeps the lower original triangle index.
+                    if best.is_none_or(|b| h.t < b.t || h.tri < b.tri) {
+                        best = Some(h);
+                        tfar = h.t.next_up();
+                    }
+                }
+            }
+        };
+    }
+    if start & LEAF_BIT != 0 {
+        test_leaf!(start);
+        return best;
+    }
     let mut sp = 0usize;
     let mut cur = start;
     loop {
-        if cur & LEAF_BIT == 0 {
-            let node = &bvh.nodes[cur as usize];
-            let NodeHits { bits, lo, inside } = hit_node1(node, r, tfar);
-            if bits != 0 {
-                let rest = bits & (bits - 1);
-                if rest == 0 {
-                    // one child: descend.
-                    cur = node.child[bits.trailing_zeros() as usize];
+        let node = &bvh.nodes[cur as usize];
+        let NodeHits { bits, lo, inside } = hit_node1(node, r, tfar);
+        let leaves = bits & node.leaves();
+        if leaves != 0 {
+            // (any hit: the leaves the ray starts in after the others)
+            let (early, late) = if ANY_HIT && ORIGIN_LAST {
+                (leaves & !inside, leaves & inside)
+            } else {
+                (leaves, 0)
+            };
+            for mut m in [early, late] {
+                while m != 0 {
+                    let slot = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    if !ANY_HIT && lo[slot] > tfar * SLAB_FAR_SCALE {
+                        continue;
+                    }
+                    test_leaf!(node.child[slot]);
+                }
+            }
+        }
+        let inner = bits & !leaves;
+        if inner != 0 {
+            let rest = inner & (inner - 1);
+            if rest == 0 {
+                // one child: descend (closest hit: unless a hit at this node lies before it).
+                let slot = inner.trailing_zeros() as usize;
+                if ANY_HIT || lo[slot] <= tfar * SLAB_FAR_SCALE {
+                    cur = node.child[slot];
                     continue;
                 }
-                if rest & (rest - 1) == 0 {
-                    // two children (the usual case): nearer first by entry distance, the
-                    // other pushed.
-                    let (a, b) = (
-                        bits.trailing_zeros() as usize,
-                        rest.trailing_zeros() as usize,
-                    );
-                    // (any hit: the box the ray starts in after the other, see
-                    // `ORIGIN_LAST`)
-                    let b_first = if ANY_HIT && ORIGIN_LAST {
-                        let (ia, ib) = (inside >> a & 1, inside >> b & 1);
-                        if ia != ib { ia == 1 } else { lo[b] < lo[a] }
-                    } else {
-                        lo[b] < lo[a]
-                    };
-                    let (first, later) = if b_first { (b, a) } else { (a, b) };
-                    stack[sp] = (node.child[later], lo[later]);
-                    sp += 1;
+            } else if rest & (rest - 1) == 0 {
+                // two children (the usual case): nearer first by entry distance, the other
+                // pushed.
+                let (a, b) = (
+                    inner.trailing_zeros() as usize,
+                    rest.trailing_zeros() as usize,
+                );
+                // (any hit: the box the ray starts in after the other, see `ORIGIN_LAST`)
+                let b_first = if ANY_HIT && ORIGIN_LAST {
+                    let (ia, ib) = (inside >> a & 1, inside >> b & 1);
+                    if ia != ib { ia == 1 } else { lo[b] < lo[a] }
+                } else {
+                    lo[b] < lo[a]
+                };
+                let (first, later) = if b_first { (b, a) } else { (a, b) };
+                stack[sp] = (node.child[later], lo[later]);
+                sp += 1;
+                if ANY_HIT || lo[first] <= tfar * SLAB_FAR_SCALE {
                     cur = node.child[first];
                     continue;
                 }
+            } else {
                 // several: push the hit ones farthest first in the octant's order (no
                 // branches: every slot is written, the pointer moves only for hit ones),
-                // then continue with the nearest.
+                // then go on with the nearest (through the pop below).
                 let order = node.order[r.octant];
-                // (any hit: the boxes the ray starts in are pushed before the others, so they
-                // are visited after them, see `ORIGIN_LAST`)
+                // (any hit: the boxes the ray starts in are pushed before the others, so
+                // they are visited after them, see `ORIGIN_LAST`)
                 let (early, late) = if ANY_HIT && ORIGIN_LAST {
-                    (bits & inside, bits & !inside)
+                    (inner & inside, inner & !inside)
                 } else {
-                    (0, bits)
+                    (0, inner)
                 };
                 // (the loop is written twice: as one closure called twice it cost 3% more
                 // instructions on shadow and incoherent rays)
@@ -287,24 +340,6 @@ pub(super) fn walk<const ANY_HIT: bool>(
                     let slot = (order >> (3 * k) & 7) as usize;
                     stack[sp] = (node.child[slot], lo[slot]);
                     sp += (late >> slot & 1) as usize;
-                }
-                sp -= 1;
-                cur = stack[sp].0;
-                continue;
-            }
-        } else {
-            let (first, count) = leaf_blocks(cur);
-            for block in first..first + count {
-                if let Some(h) = hit_block1::<ANY_HIT>(accel, block, r, tfar, cull) {
-                    if ANY_HIT {
-                        return Some(h);
-                    }
-                    // record hit: as in intersect1, the new limit is the next float above t
-                    // and an exact tie keeps the lower original triangle index.
-                    if best.is_none_or(|b| h.t < b.t || h.tri < b.tri) {
-                        best = Some(h);
-                        tfar = h.t.next_up();
-                    }
                 }
             }
         }
