@@ -28,7 +28,7 @@ pub struct Report {
     pub build: Timing,
     /// Bytes of the 8-wide tree and its triangle blocks.
     pub wide_bytes: usize,
-    /// Of the last build, the 8-wide collapse (ms).
+    /// The 8-wide collapse (plan and block fill), the fastest of the timed builds' (ms).
     pub collapse_ms: f64,
     /// The BVH2 builder (`binned`, or the obvhs preset `fast` / `medium` / `slow`).
     pub builder: &'static str,
@@ -130,7 +130,7 @@ pub fn format_report(r: &Report) -> String {
     let peer = r.peer.as_ref().ok();
     let _ = write!(
         s,
-        "BVH build ({} BVH2 + 8-wide collapse, threads {}): best {:.2} ms, median {:.2} ms (collapse {:.2} ms), wide tree {:.1} bytes/triangle",
+        "BVH build ({} BVH2 + 8-wide collapse, threads {}): best {:.2} ms, median {:.2} ms (collapse best {:.2} ms), wide tree {:.1} bytes/triangle",
         match r.builder {
             "binned" => "binned SAH",
             b => b,
