@@ -131,21 +131,21 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
 /// warm-up, on a pool of `threads` (whitted's builder splits large subtrees across them; the
 /// obvhs presets build on one). Each build starts with the previous one freed, untimed, as the
 /// peer releases its previous scene before each timed commit (timing the drop of the old tree
-/// with the new build, as before, added its unmapping to whitted's figure).
+/// with the new build, as before, added its unmapping to whitted's figure). Also the shortest
+/// 8-wide collapse of those builds (`Accel::collapse_time`; the last build's alone swung from
+/// 62 to 802 ms at 1.3M triangles while the best build stayed).
 pub fn time_build(
     tris: &[[Vec3; 3]],
     reps: usize,
     quality: BuildQuality,
     threads: usize,
-) -> (Accel, Timing) {
+) -> (Accel, Timing, std::time::Duration) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
         .expect("thread pool");
     pool.install(|| {
         let accel = std::cell::RefCell::new(Accel::default());
-        // the collapse of the fastest build, reported beside the build's best (the last
-        // build's alone swung from 62 to 802 ms at 1.3M triangles while the best stayed)
         let collapse = std::cell::Cell::new(std::time::Duration::MAX);
         let t = time_reps_after(
             reps,
@@ -157,8 +157,6 @@ pub fn time_build(
                 *accel.borrow_mut() = a;
             },
         );
-        let mut accel = accel.into_inner();
-        accel.collapse_time = collapse.get();
-        (accel, t)
+        (accel.into_inner(), t, collapse.get())
     })
 }
