@@ -319,6 +319,17 @@ fn bench_size_options() {
         .find(|m| m.workload == Workload::Primary)
         .unwrap();
     assert_eq!(m.results.tri.len(), 64 * 36);
+    // memory: what traversal reads, and the process's peak while the mesh was benchmarked
+    assert!(
+        r.accel_bytes > r.wide_bytes,
+        "{} {}",
+        r.accel_bytes,
+        r.wide_bytes
+    );
+    if cfg!(target_os = "linux") {
+        let peak = r.peak_resident.expect("VmHWM on Linux");
+        assert!(peak >= r.accel_bytes as u64, "{peak} {}", r.accel_bytes);
+    }
     let huge = Options {
         width: 1 << 20,
         height: 1 << 20,
@@ -381,6 +392,34 @@ fn bench_defaults_to_the_shipped_kitten() {
         .to_owned();
     assert!(mesh.ends_with("meshes/kitten.m"), "{json}");
     assert_eq!(json["whitted_bench"][0]["triangles"], 20438, "{json}");
+    // the kitten's BVH2, SoA columns and wide tree: 100-300 bytes per triangle
+    let accel = json["whitted_bench"][0]["accel_bytes"]
+        .as_u64()
+        .unwrap_or(0);
+    assert!((20438 * 100..20438 * 300).contains(&accel), "{json}");
+    if cfg!(target_os = "linux") {
+        let peak = json["whitted_bench"][0]["peak_resident_bytes"].as_u64();
+        assert!(peak.is_some_and(|p| p > accel), "{json}");
+    }
+}
+
+/// `VmHWM` is read from `/proc/<pid>/status` in bytes; anything else gives no figure.
+#[test]
+fn peak_resident_parses_vm_hwm() {
+    let status = "Name:\twhitted\nVmPeak:\t  900 kB\nVmHWM:\t    1732 kB\nVmRSS:\t 1700 kB\n";
+    assert_eq!(bench::parse_vm_hwm(status), Some(1732 * 1024));
+    assert_eq!(bench::parse_vm_hwm("VmRSS:\t 1700 kB\n"), None);
+    assert_eq!(bench::parse_vm_hwm("VmHWM:\t 17x2 kB\n"), None);
+    assert_eq!(bench::parse_vm_hwm("VmHWM:\t 1732 MB\n"), None);
+    if cfg!(target_os = "linux") {
+        // with 64 MiB resident the peak is at least that, whatever other tests reset or
+        // hold meanwhile (a peak is never below the resident size)
+        bench::reset_peak_resident();
+        let v = std::hint::black_box(vec![1u8; 64 << 20]);
+        let peak = bench::peak_resident_bytes().unwrap();
+        assert!(peak >= 64 << 20, "{peak}");
+        assert_eq!(v.iter().map(|&b| b as usize).sum::<usize>(), 64 << 20);
+    }
 }
 
 /// The reported collapse time is the fastest timed build's: never longer than the fastest

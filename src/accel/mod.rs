@@ -94,6 +94,15 @@ pub struct Accel {
 }
 
 impl Accel {
+    /// Bytes of everything traversal reads: the BVH2's nodes, the triangles' SoA columns, the
+    /// wide tree with its blocks, and the hybrids' entry map.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node>()
+            + self.tris.bytes()
+            + self.wide.bytes()
+            + self.wide.entry.len() * size_of::<u32>()
+    }
+
     /// Build over `tris` (each `[v0, v1, v2]`); hits report indices into `tris`.
     pub fn build(tris: &[[Vec3; 3]], quality: BuildQuality) -> Accel {
         let start = Instant::now();

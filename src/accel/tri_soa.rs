@@ -31,6 +31,13 @@ pub struct TriangleSoa {
 }
 
 impl TriangleSoa {
+    /// Bytes of the columns and the index map (what the packet engines' leaves read).
+    pub fn bytes(&self) -> usize {
+        let cols = [&self.v0, &self.v1, &self.v2, &self.n, &self.p1, &self.p2];
+        let floats: usize = cols.iter().flat_map(|c| c.iter()).map(Vec::len).sum();
+        (floats + self.n_len.len()) * size_of::<f32>() + self.prim.len() * size_of::<u32>()
+    }
+
     /// Lay out `tris` in the order `order` (BVH leaf order; entries index `tris`).
     ///
     /// Degenerate policy: a triangle whose `<n, n>` is zero, subnormal or not finite is stored

@@ -102,6 +102,9 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
             "--width {width} --height {height}: over the cap of {MAX_PIXELS} pixels"
         )));
     }
+    // (the peak reported covers this mesh from here on: its subdivision, build, workloads
+    // and every engine's results, not what earlier meshes of the same run held)
+    reset_peak_resident();
     let mesh = subdivide_like_peer(&mesh, opts.subdivide);
     let tris = triangles(&mesh);
     let threads = opts.threads.max(1);
@@ -120,6 +123,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     let (accel, build, collapse) = time_build(&tris, reps, quality, threads);
     let work = Workloads::generate(&mesh, &accel, width, height);
     let measured = measure(&accel, &work, threads, reps);
+    let peak_resident = peak_resident_bytes();
     let peer = if opts.no_peer {
         Err("not run (--no-peer)".to_string())
     } else {
@@ -142,6 +146,8 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
         height: work.height,
         build,
         wide_bytes: accel.wide.bytes(),
+        accel_bytes: accel.bytes(),
+        peak_resident,
         collapse_ms: collapse.as_secs_f64() * 1e3,
         builder: quality.name(),
         measured,

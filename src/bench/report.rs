@@ -28,6 +28,13 @@ pub struct Report {
     pub build: Timing,
     /// Bytes of the 8-wide tree and its triangle blocks.
     pub wide_bytes: usize,
+    /// Bytes of everything traversal reads ([`crate::accel::Accel::bytes`]: both trees, the SoA columns,
+    /// the blocks).
+    pub accel_bytes: usize,
+    /// Peak resident memory of the process while this mesh was benchmarked (subdivision,
+    /// builds, workloads, every engine's results; not the peer, a process of its own), bytes;
+    /// `None` where the system does not say (not Linux).
+    pub peak_resident: Option<u64>,
     /// The 8-wide collapse (plan and block fill), the fastest of the timed builds' (ms).
     pub collapse_ms: f64,
     /// The BVH2 builder (`binned`, or the obvhs preset `fast` / `medium` / `slow`).
@@ -153,6 +160,18 @@ pub fn format_report(r: &Report) -> String {
         }
         None => s.push('\n'),
     }
+    let mb = |b: f64| b / (1024.0 * 1024.0);
+    let _ = writeln!(
+        s,
+        "memory: BVH2 + SoA triangles + wide tree {:.1} MiB ({:.1} bytes/triangle); peak resident {} (this mesh: subdivision, builds, workloads, results; not the peer's)",
+        mb(r.accel_bytes as f64),
+        r.accel_bytes as f64 / r.triangles.max(1) as f64,
+        r.peak_resident
+            .map_or("not available".to_string(), |b| format!(
+                "{:.1} MiB",
+                mb(b as f64)
+            ))
+    );
     for cpu in [false, true] {
         let _ = writeln!(
             s,
@@ -353,6 +372,8 @@ pub fn report_json(r: &Report) -> serde_json::Value {
         "packet_scalar_mismatches": r.mismatches(),
         "engine_mismatches": r.mismatches(),
         "wide_bytes": r.wide_bytes,
+        "accel_bytes": r.accel_bytes,
+        "peak_resident_bytes": r.peak_resident,
         "collapse_ms": r.collapse_ms,
         "builder": r.builder,
         "secondary_rays_from": "whitted's own primary hits (match Embree's sets to ~1 ulp)",

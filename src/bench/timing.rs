@@ -1,4 +1,4 @@
-//! Timing passes and builds: best and median, wall clock and CPU time.
+//! Timing passes and builds: best and median, wall clock and CPU time; peak memory.
 
 use super::*;
 use crate::accel::{Accel, BuildQuality};
@@ -159,4 +159,28 @@ pub fn time_build(
         );
         (accel.into_inner(), t, collapse.get())
     })
+}
+
+/// Start a new peak of resident memory for [`peak_resident_bytes`] (Linux: `5` written to
+/// `/proc/self/clear_refs` resets `VmHWM` to the current resident size). Without it, or
+/// where it fails, the peak is the process's since it started.
+pub fn reset_peak_resident() {
+    #[cfg(target_os = "linux")]
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// The process's peak resident memory (bytes) since it started or since the last
+/// [`reset_peak_resident`]: `VmHWM` of `/proc/self/status`; `None` where that is not
+/// readable (not Linux).
+pub fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    parse_vm_hwm(&status)
+}
+
+/// The `VmHWM:` line of a `/proc/<pid>/status` text, in bytes.
+pub fn parse_vm_hwm(status: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let mut f = line["VmHWM:".len()..].split_whitespace();
+    let kb: u64 = f.next()?.parse().ok()?;
+    (f.next() == Some("kB")).then_some(kb * 1024)
 }
