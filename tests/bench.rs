@@ -329,6 +329,8 @@ fn bench_size_options() {
     if cfg!(target_os = "linux") {
         let peak = r.peak_resident.expect("VmHWM on Linux");
         assert!(peak >= r.accel_bytes as u64, "{peak} {}", r.accel_bytes);
+        // (this machine lets a process reset its peak: the figure is this mesh's)
+        assert!(r.peak_reset);
     }
     let huge = Options {
         width: 1 << 20,
@@ -400,6 +402,10 @@ fn bench_defaults_to_the_shipped_kitten() {
     if cfg!(target_os = "linux") {
         let peak = json["whitted_bench"][0]["peak_resident_bytes"].as_u64();
         assert!(peak.is_some_and(|p| p > accel), "{json}");
+        assert_eq!(
+            json["whitted_bench"][0]["peak_resident_scope"], "mesh",
+            "{json}"
+        );
     }
 }
 
@@ -414,12 +420,33 @@ fn peak_resident_parses_vm_hwm() {
     if cfg!(target_os = "linux") {
         // with 64 MiB resident the peak is at least that, whatever other tests reset or
         // hold meanwhile (a peak is never below the resident size)
-        bench::reset_peak_resident();
+        assert!(bench::reset_peak_resident());
         let v = std::hint::black_box(vec![1u8; 64 << 20]);
         let peak = bench::peak_resident_bytes().unwrap();
         assert!(peak >= 64 << 20, "{peak}");
         assert_eq!(v.iter().map(|&b| b as usize).sum::<usize>(), 64 << 20);
     }
+}
+
+/// The `memory:` line says what the peak covers: this mesh after a reset, the whole process
+/// where the system refused the reset (a later mesh's figure then includes earlier meshes),
+/// and that there is none where the system does not say.
+#[test]
+fn memory_line_names_what_the_peak_covers() {
+    let mesh = bench::memory_line(3 << 20, 1 << 16, Some(300 << 20), true);
+    assert!(mesh.contains("3.0 MiB (48.0 bytes/triangle)"), "{mesh}");
+    assert!(
+        mesh.contains("peak resident 300.0 MiB (this mesh:"),
+        "{mesh}"
+    );
+    let process = bench::memory_line(3 << 20, 1 << 16, Some(300 << 20), false);
+    assert!(
+        process.contains("300.0 MiB (the process's since it started, earlier meshes included"),
+        "{process}"
+    );
+    assert!(!process.contains("this mesh"), "{process}");
+    let none = bench::memory_line(3 << 20, 1 << 16, None, false);
+    assert!(none.ends_with("peak resident not available"), "{none}");
 }
 
 /// The reported collapse time is the fastest timed build's: never longer than the fastest

@@ -104,7 +104,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     }
     // (the peak reported covers this mesh from here on: its subdivision, build, workloads
     // and every engine's results, not what earlier meshes of the same run held)
-    reset_peak_resident();
+    let peak_reset = reset_peak_resident();
     let mesh = subdivide_like_peer(&mesh, opts.subdivide);
     let tris = triangles(&mesh);
     let threads = opts.threads.max(1);
@@ -148,6 +148,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
         wide_bytes: accel.wide.bytes(),
         accel_bytes: accel.bytes(),
         peak_resident,
+        peak_reset,
         collapse_ms: collapse.as_secs_f64() * 1e3,
         builder: quality.name(),
         measured,

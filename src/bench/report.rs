@@ -35,6 +35,9 @@ pub struct Report {
     /// builds, workloads, every engine's results; not the peer, a process of its own), bytes;
     /// `None` where the system does not say (not Linux).
     pub peak_resident: Option<u64>,
+    /// Whether the peak was reset before this mesh ([`super::reset_peak_resident`]); if
+    /// not, `peak_resident` is the process's peak since it started, earlier meshes included.
+    pub peak_reset: bool,
     /// The 8-wide collapse (plan and block fill), the fastest of the timed builds' (ms).
     pub collapse_ms: f64,
     /// The BVH2 builder (`binned`, or the obvhs preset `fast` / `medium` / `slow`).
@@ -96,6 +99,28 @@ impl Report {
 
 fn fmt_v3(v: [f64; 3]) -> String {
     format!("({:.4} {:.4} {:.4})", v[0], v[1], v[2])
+}
+
+/// The report's `memory:` line: what traversal reads, and the peak resident size with what
+/// it covers (this mesh when the peak was reset before it, else the whole process so far).
+pub fn memory_line(accel_bytes: usize, triangles: usize, peak: Option<u64>, reset: bool) -> String {
+    let mb = |b: f64| b / (1024.0 * 1024.0);
+    let peak = match peak {
+        None => "not available".to_string(),
+        Some(b) if reset => format!(
+            "{:.1} MiB (this mesh: subdivision, builds, workloads, results; not the peer's)",
+            mb(b as f64)
+        ),
+        Some(b) => format!(
+            "{:.1} MiB (the process's since it started, earlier meshes included: the system refused the reset of the peak; not the peer's)",
+            mb(b as f64)
+        ),
+    };
+    format!(
+        "memory: BVH2 + SoA triangles + wide tree {:.1} MiB ({:.1} bytes/triangle); peak resident {peak}",
+        mb(accel_bytes as f64),
+        accel_bytes as f64 / triangles.max(1) as f64,
+    )
 }
 
 /// The report as text tables.
@@ -160,17 +185,10 @@ pub fn format_report(r: &Report) -> String {
         }
         None => s.push('\n'),
     }
-    let mb = |b: f64| b / (1024.0 * 1024.0);
     let _ = writeln!(
         s,
-        "memory: BVH2 + SoA triangles + wide tree {:.1} MiB ({:.1} bytes/triangle); peak resident {} (this mesh: subdivision, builds, workloads, results; not the peer's)",
-        mb(r.accel_bytes as f64),
-        r.accel_bytes as f64 / r.triangles.max(1) as f64,
-        r.peak_resident
-            .map_or("not available".to_string(), |b| format!(
-                "{:.1} MiB",
-                mb(b as f64)
-            ))
+        "{}",
+        memory_line(r.accel_bytes, r.triangles, r.peak_resident, r.peak_reset)
     );
     for cpu in [false, true] {
         let _ = writeln!(
@@ -374,6 +392,7 @@ pub fn report_json(r: &Report) -> serde_json::Value {
         "wide_bytes": r.wide_bytes,
         "accel_bytes": r.accel_bytes,
         "peak_resident_bytes": r.peak_resident,
+        "peak_resident_scope": if r.peak_reset { "mesh" } else { "process" },
         "collapse_ms": r.collapse_ms,
         "builder": r.builder,
         "secondary_rays_from": "whitted's own primary hits (match Embree's sets to ~1 ulp)",

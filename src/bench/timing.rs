@@ -162,11 +162,14 @@ pub fn time_build(
 }
 
 /// Start a new peak of resident memory for [`peak_resident_bytes`] (Linux: `5` written to
-/// `/proc/self/clear_refs` resets `VmHWM` to the current resident size). Without it, or
-/// where it fails, the peak is the process's since it started.
-pub fn reset_peak_resident() {
+/// `/proc/self/clear_refs` resets `VmHWM` to the current resident size). Returns whether it
+/// did: where the write is refused (a locked-down container) or elsewhere than Linux, the
+/// peak stays the process's since it started.
+pub fn reset_peak_resident() -> bool {
     #[cfg(target_os = "linux")]
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    return std::fs::write("/proc/self/clear_refs", "5").is_ok();
+    #[cfg(not(target_os = "linux"))]
+    false
 }
 
 /// The process's peak resident memory (bytes) since it started or since the last
