@@ -165,9 +165,12 @@ impl Bvh8 {
     /// array is first written here, so its fresh pages are faulted in by every thread of the
     /// pool, not by the collapse's one (kitten on two threads, six builds per process, seven
     /// processes alternating: best 2.54-2.83 ms and median 2.73-2.98 against 2.73-3.86 and
-    /// 3.14-4.43 when the collapse wrote the ids; one thread and 1.3M triangles level). Call
-    /// once after `plan`.
+    /// 3.14-4.43 when the collapse wrote the ids; one thread and 1.3M triangles level). Once
+    /// the blocks are made, a further call changes nothing.
     pub fn fill(&mut self, t: &TriangleSoa) {
+        if self.pending.is_empty() {
+            return;
+        }
         let pending = std::mem::take(&mut self.pending);
         let mut blocks = Vec::with_capacity(pending.len());
         super::pages::advise_huge(&blocks);
@@ -572,6 +575,12 @@ mod tests {
         };
         assert_eq!(bits(&one), bits(&two));
         assert_eq!(bits(&one), bits(&accel));
+        // a second fill keeps the blocks
+        let mut again = accel.wide.clone();
+        again.fill(&accel.tris);
+        let mut copy = Accel::build(&tris, BuildQuality::Binned);
+        copy.wide = again;
+        assert_eq!(bits(&copy), bits(&accel));
     }
 
     /// The builder counts block lanes, not triangles (`build.rs`, `lanes`), so the collapse
