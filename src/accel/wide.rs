@@ -324,9 +324,9 @@ impl Node8 {
 }
 
 impl TriBlock8 {
-    /// The block of the triangles at `slots` (`u32::MAX` past them): their ids, then their
-    /// lanes from `t`.
-    fn of_slots(slots: &[u32; BLOCK], t: &TriangleSoa) -> TriBlock8 {
+    /// The block of the triangles at `slots` (at most 8; an entry `u32::MAX` ends them):
+    /// their ids, then their lanes from `t`.
+    fn of_slots(slots: &[u32], t: &TriangleSoa) -> TriBlock8 {
         let mut block = TriBlock8 {
             prim: [u32::MAX; BLOCK],
             ..TriBlock8::default()
@@ -447,15 +447,7 @@ pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
                 let slots: Vec<u32> = (start..start + count)
                     .map(|j| slot_of[cw.primitive_indices[j as usize] as usize])
                     .collect();
-                let mut block = TriBlock8 {
-                    prim: [u32::MAX; BLOCK],
-                    ..TriBlock8::default()
-                };
-                for (j, &sl) in slots.iter().enumerate() {
-                    (block.prim[j], block.slot[j]) = (accel.tris.prim[sl as usize], sl);
-                }
-                block.fill(&accel.tris);
-                out.blocks.push(block);
+                out.blocks.push(TriBlock8::of_slots(&slots, &accel.tris));
                 LEAF_BIT | (out.blocks.len() - 1) as u32
             } else {
                 n.child_node_index(c)
