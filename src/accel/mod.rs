@@ -134,7 +134,7 @@ impl Accel {
             || TriangleSoa::new(tris, &order),
             || {
                 let plan = Instant::now();
-                let wide = Bvh8::plan(&nodes, &order);
+                let wide = Bvh8::plan(&nodes);
                 (tree_depth(&nodes), wide, plan.elapsed())
             },
         );

@@ -123,16 +123,15 @@ impl Bvh8 {
     /// Collapse `accel`'s binary tree (see the module header): [`Bvh8::plan`], then
     /// [`Bvh8::fill`] from its triangles.
     pub fn collapse(accel: &Accel) -> Bvh8 {
-        let mut out = Bvh8::plan(&accel.nodes, &accel.tris.prim);
+        let mut out = Bvh8::plan(&accel.nodes);
         out.fill(&accel.tris);
         out
     }
 
     /// The wide nodes over the binary tree `nodes` (padded boxes), and per block the SoA
-    /// slots of its triangles (`prim` is the slot order, for its length): it needs no
-    /// triangle data, so `Accel::build` runs it beside the SoA layout, then
-    /// [`Bvh8::fill`] makes the blocks.
-    pub fn plan(nodes: &[Node], prim: &[u32]) -> Bvh8 {
+    /// slots of its triangles: it needs no triangle data, so `Accel::build` runs it beside
+    /// the SoA layout, then [`Bvh8::fill`] makes the blocks.
+    pub fn plan(nodes: &[Node]) -> Bvh8 {
         let mut out = Bvh8::default();
         if nodes.is_empty() {
             return out;
@@ -143,7 +142,7 @@ impl Bvh8 {
         };
         out.entry = vec![NO_ENTRY; nodes.len()];
         out.nodes.reserve(nodes.len() / 4 + 1);
-        out.pending.reserve(prim.len() / 4 + 1);
+        out.pending.reserve(src.counts[0] as usize / 4 + 1);
         super::pages::advise_huge(&out.nodes);
         let root = &nodes[0];
         if src.counts[0] as usize <= BLOCK || root.count > 0 {
