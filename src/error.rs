@@ -15,12 +15,13 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
-    /// A text file (mesh, scene, ray file) is malformed at a given line.
-    #[error("{}:{line}: {msg}", path.display())]
+    /// A text file (mesh, scene, ray file) is malformed at a given line, or as a whole
+    /// (line 0: then the message names only the file, as in `bad.m: no faces`).
+    #[error("{}{}: {msg}", path.display(), at_line(*line))]
     Parse {
         /// The file.
         path: PathBuf,
-        /// 1-based line (0 when the problem is the whole file).
+        /// 1-based line (for what the whole file lacks, its last line: where it ended).
         line: usize,
         /// What is wrong there.
         msg: String,
@@ -87,7 +88,7 @@ impl Error {
             source,
         }
     }
-    /// An [`Error::Parse`] at `line` of `path`.
+    /// An [`Error::Parse`] at `line` of `path` (0: the whole file).
     pub fn parse(path: &Path, line: usize, msg: impl Into<String>) -> Self {
         Error::Parse {
             path: path.to_path_buf(),
@@ -113,3 +114,12 @@ impl Error {
 
 /// whitted's `Result`, with [`Error`] by default.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// `:line` for a line of a file, nothing for the whole file (line 0).
+fn at_line(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}")
+    }
+}

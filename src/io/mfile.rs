@@ -138,7 +138,10 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     }
 
     if faces.is_empty() {
-        return Err(err(0, "no faces".into()));
+        return Err(err(
+            super::last_line(bytes),
+            "no faces by the end of the file".into(),
+        ));
     }
     let mut triangles = Vec::with_capacity(faces.len());
     for (line_no, verts) in &faces {
@@ -420,7 +423,7 @@ mod tests {
                 "undefined vertex 4",
             ),
             ("Vertex 1 0 0 0\nFace 1 1 1\n", ":2:", "at least 3"),
-            ("Vertex 1 0 0 0\n", ":0:", "no faces"),
+            ("Vertex 1 0 0 0\n", ":1:", "no faces by the end of the file"),
             ("\u{0}\u{1}binary", ":1:", "binary"),
         ];
         for (text, line, what) in cases {

@@ -142,6 +142,18 @@ pub fn list_extensions(exts: &[&str]) -> String {
         .join(", ")
 }
 
+/// The number of the file's last line (1 for an empty file; a final newline ends the last
+/// line rather than starting one): where an error about what the whole file lacks points,
+/// as a compiler points at the end of the file.
+pub(crate) fn last_line(bytes: &[u8]) -> usize {
+    let newlines = bytes.iter().filter(|&&b| b == b'\n').count();
+    if bytes.last().is_none_or(|&b| b == b'\n') {
+        newlines.max(1)
+    } else {
+        newlines + 1
+    }
+}
+
 /// One line of an OBJ-family text file (OBJ, MTL) as the parsers read it: without its `\r`
 /// and its comment (from `#` to the end, which may hold any bytes), trimmed; a NUL byte or
 /// invalid UTF-8 outside the comment is an error naming the file and line (`what` names
@@ -192,4 +204,18 @@ pub fn extension(path: &Path) -> String {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase()
+}
+
+#[cfg(test)]
+mod tests {
+    /// The last line's number, with and without a final newline.
+    #[test]
+    fn last_line_counts_like_an_editor() {
+        assert_eq!(super::last_line(b""), 1);
+        assert_eq!(super::last_line(b"a"), 1);
+        assert_eq!(super::last_line(b"a\n"), 1);
+        assert_eq!(super::last_line(b"a\nb"), 2);
+        assert_eq!(super::last_line(b"a\nb\n"), 2);
+        assert_eq!(super::last_line(b"a\n\n"), 2);
+    }
 }

@@ -342,7 +342,11 @@ fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<
         }
     }
     if p.faces.is_empty() {
-        return Err(Error::parse(path, 0, "OBJ: no faces"));
+        return Err(Error::parse(
+            path,
+            super::last_line(bytes),
+            "OBJ: no faces by the end of the file",
+        ));
     }
     let coloured = p.colors.iter().filter(|c| c.is_some()).count();
     if coloured > 0 && coloured < p.colors.len() {
@@ -459,7 +463,10 @@ mod tests {
             ("v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", ":1:"),
             ("v 0 0\n", ":1:"),
             ("v 0 0 0\nv 1 0 0\nf 1 2\n", ":3:"),
-            ("v 0 0 0\n", ":0:"),
+            (
+                "v 0 0 0\nv 1 0 0\n",
+                ":2: OBJ: no faces by the end of the file",
+            ),
         ];
         for (text, line) in cases {
             let e = parse(text).unwrap_err().to_string();
