@@ -15,9 +15,10 @@ use glam::Vec3;
 use proptest::prelude::*;
 use whitted::accel::scalar::{intersect_brute1, literal_hit};
 use whitted::accel::{
-    Accel, BuildQuality, intersect_hybrid8, intersect_hybrid16, intersect_wide1, intersect_wide8,
-    intersect1, intersect8, intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1,
-    occluded_wide8, occluded1, occluded8, occluded16,
+    Accel, BuildQuality, intersect_hybrid8, intersect_hybrid16, intersect_wide1,
+    intersect_wide1_many, intersect_wide8, intersect1, intersect8, intersect16, occluded_hybrid8,
+    occluded_hybrid16, occluded_wide1, occluded_wide1_many, occluded_wide8, occluded1, occluded8,
+    occluded16,
 };
 use whitted::io::load_mesh;
 use whitted::packet::RayPacket8;
@@ -158,6 +159,11 @@ fn check_packets(
             cull,
         ));
     }
+    // the batch entries over every ray at once (one stack borrow for all of them)
+    let mut many = vec![None; rays.len()];
+    let mut many_occ = vec![false; rays.len()];
+    intersect_wide1_many(accel, rays, cull, &mut many);
+    occluded_wide1_many(accel, rays, cull, &mut many_occ);
     for (k, chunk) in rays.chunks(8).enumerate() {
         let (packet, active) = packets[k];
         let hits = intersect8(accel, &packet, active, cull);
@@ -202,6 +208,13 @@ fn check_packets(
                 ray
             );
             prop_assert_eq!(bits_of(whits.lane(i)), bits_of(scalar), "wide8 lane {}", i);
+            prop_assert_eq!(
+                bits_of(many[8 * k + i]),
+                bits_of(scalar),
+                "wide1 batch {:?}",
+                ray
+            );
+            prop_assert_eq!(many_occ[8 * k + i], scalar.is_some());
             prop_assert_eq!(occluded_wide1(accel, &ray, cull), scalar.is_some());
             prop_assert_eq!(simd::lane_set(wocc, i), scalar.is_some());
             prop_assert_eq!(
@@ -388,6 +401,9 @@ fn leaks_on(
             }
         }
     }
+    let mut many = vec![None; rays.len()];
+    intersect_wide1_many(&accel, &rays, false, &mut many);
+    leaked += many.iter().filter(|h| h.is_none()).count();
     for chunk in rays.chunks(8) {
         let (packet, active) = RayPacket8::from_fn(|i| chunk.get(i).copied());
         let hits = intersect8(&accel, &packet, active, false);
@@ -469,4 +485,32 @@ fn watertight_from_inside_a_needle_prism() {
         leaked, 0,
         "{leaked} of {total} rays escaped the closed prism"
     );
+}
+
+/// The batch entries on an empty tree report nothing, overwriting what the buffers held, and
+/// on a real one they write exactly the rays' slots.
+#[test]
+fn wide1_batch_entries_fill_every_slot() {
+    let ray = Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z, 0.0, f32::INFINITY);
+    let empty = Accel::build(&[], BuildQuality::Binned);
+    let stale = Some(Hit {
+        tri: 7,
+        t: 1.0,
+        b1: 0.0,
+        b2: 0.0,
+    });
+    let (mut hits, mut occ) = (vec![stale; 3], vec![true; 3]);
+    intersect_wide1_many(&empty, &[ray; 2], false, &mut hits);
+    occluded_wide1_many(&empty, &[ray; 2], false, &mut occ);
+    assert_eq!(hits, [None, None, stale]);
+    assert_eq!(occ, [false, false, true]);
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let accel = Accel::build(&[tri], BuildQuality::Binned);
+    let miss = Ray::new(Vec3::new(2.0, 2.0, -1.0), Vec3::Z, 0.0, f32::INFINITY);
+    intersect_wide1_many(&accel, &[ray, miss], false, &mut hits);
+    occluded_wide1_many(&accel, &[ray, miss], false, &mut occ);
+    assert_eq!(hits[0], intersect1(&accel, &ray, false));
+    assert_eq!(hits[0].map(|h| h.tri), Some(0));
+    assert_eq!((hits[1], hits[2]), (None, stale));
+    assert_eq!(occ, [true, false, true]);
 }

@@ -17,7 +17,10 @@ pub use packet16::{intersect_hybrid16, intersect16, occluded_hybrid16, occluded1
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
 pub use wide::Bvh8;
-pub use wide1::{intersect_wide1, intersect_wide8, occluded_wide1, occluded_wide8};
+pub use wide1::{
+    intersect_wide1, intersect_wide1_many, intersect_wide8, occluded_wide1, occluded_wide1_many,
+    occluded_wide8,
+};
 
 use glam::Vec3;
 use obvhs::aabb::Aabb;

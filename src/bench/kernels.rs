@@ -2,8 +2,8 @@
 
 use super::*;
 use crate::accel::{
-    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide1, intersect1, intersect8,
-    intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1, occluded1, occluded8,
+    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide1_many, intersect1, intersect8,
+    intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1_many, occluded1, occluded8,
     occluded16,
 };
 use crate::packet::{HitPacket8, RayPacket8};
@@ -75,8 +75,8 @@ impl Results {
 /// writes its result arrays): per ray `(triangle, t)` or occlusion, per packet a
 /// `HitPacket8` or an occlusion bitmask; beside each, the engine's kernel.
 pub enum Out {
-    /// Single-ray closest hit: per ray `(triangle, t)`, `(u32::MAX, inf)` on a miss.
-    Hits(Vec<(u32, f32)>, Intersect1),
+    /// Single-ray closest hit: per ray its hit, if any.
+    Hits(Vec<Option<Hit>>, Intersect1),
     /// Single-ray any hit: per ray whether it is occluded.
     Occ(Vec<bool>, Occluded1),
     /// Packet closest hit: one `HitPacket8` per packet of [`Packets`].
@@ -89,10 +89,26 @@ pub enum Out {
     Occ16(Vec<u8>, Occluded16),
 }
 
-/// A single-ray closest-hit kernel (`intersect1`, `intersect_wide1`).
-pub type Intersect1 = fn(&Accel, &Ray, bool) -> Option<Hit>;
-/// A single-ray any-hit kernel.
-pub type Occluded1 = fn(&Accel, &Ray, bool) -> bool;
+/// A single-ray closest-hit kernel on a run of rays, one hit per ray into the output
+/// (`intersect1` ray by ray, `intersect_wide1_many`; the peer's threads likewise hand
+/// `rtcIntersect1` and `rtcIntersect8` runs of rays).
+pub type Intersect1 = fn(&Accel, &[Ray], bool, &mut [Option<Hit>]);
+/// A single-ray any-hit kernel on a run of rays.
+pub type Occluded1 = fn(&Accel, &[Ray], bool, &mut [bool]);
+
+/// `intersect1` on each ray of a run.
+fn intersect1_each(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = intersect1(accel, r, cull);
+    }
+}
+
+/// `occluded1` on each ray of a run.
+fn occluded1_each(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [bool]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = occluded1(accel, r, cull);
+    }
+}
 /// A packet closest-hit kernel (`intersect8`, `intersect_hybrid8`).
 pub type Intersect8 = fn(&Accel, &RayPacket8, M32x8, bool) -> HitPacket8;
 /// A packet any-hit kernel.
@@ -110,7 +126,8 @@ pub enum Engine {
     Scalar,
     /// `intersect8` / `occluded8` on the binary tree, 8 consecutive rays.
     Packet,
-    /// `intersect_wide1` / `occluded_wide1` on the 8-wide tree, ray by ray.
+    /// `intersect_wide1` / `occluded_wide1` on the 8-wide tree, ray by ray (through the
+    /// batch entries `intersect_wide1_many` / `occluded_wide1_many`).
     Wide,
     /// `intersect_hybrid8` / `occluded_hybrid8`: packets on the binary tree, single rays on
     /// the wide tree once few lanes remain.
@@ -153,16 +170,12 @@ impl Engine {
     }
 }
 
-fn hits1(accel: &Accel, f: Intersect1, rays: &[Ray], out: &mut [(u32, f32)]) {
-    for (r, o) in rays.iter().zip(out) {
-        *o = f(accel, r, false).map_or((u32::MAX, f32::INFINITY), |h| (h.tri, h.t));
-    }
+fn hits1(accel: &Accel, f: Intersect1, rays: &[Ray], out: &mut [Option<Hit>]) {
+    f(accel, rays, false, out);
 }
 
 fn occ1(accel: &Accel, f: Occluded1, rays: &[Ray], out: &mut [bool]) {
-    for (r, o) in rays.iter().zip(out) {
-        *o = f(accel, r, false);
-    }
+    f(accel, rays, false, out);
 }
 
 fn hits8(
@@ -275,15 +288,15 @@ impl Out {
     /// Buffers for `engine` on `rays`, closest hit or any hit.
     pub fn new(engine: Engine, any_hit: bool, rays: &[Ray]) -> Out {
         let packets = rays.len().div_ceil(8);
-        let (hits, occ) = (vec![(0, 0.0); rays.len()], vec![false; rays.len()]);
+        let (hits, occ) = (vec![None; rays.len()], vec![false; rays.len()]);
         let (hits8, occ8) = (vec![HitPacket8::none(); packets], vec![0; packets]);
         match (engine, any_hit) {
-            (Engine::Scalar, false) => Out::Hits(hits, intersect1),
-            (Engine::Scalar, true) => Out::Occ(occ, occluded1),
+            (Engine::Scalar, false) => Out::Hits(hits, intersect1_each),
+            (Engine::Scalar, true) => Out::Occ(occ, occluded1_each),
             (Engine::Packet, false) => Out::Hits8(hits8, intersect8),
             (Engine::Packet, true) => Out::Occ8(occ8, occluded8),
-            (Engine::Wide, false) => Out::Hits(hits, intersect_wide1),
-            (Engine::Wide, true) => Out::Occ(occ, occluded_wide1),
+            (Engine::Wide, false) => Out::Hits(hits, intersect_wide1_many),
+            (Engine::Wide, true) => Out::Occ(occ, occluded_wide1_many),
             (Engine::Hybrid, false) => Out::Hits8(hits8, intersect_hybrid8),
             (Engine::Hybrid, true) => Out::Occ8(occ8, occluded_hybrid8),
             (Engine::Packet16, false) => Out::Hits16(hits8, intersect16),
@@ -301,27 +314,13 @@ impl Out {
 
 pub(super) fn results_of(out: &Out, n: usize) -> Results {
     match out {
-        Out::Hits(h, _) => Results {
-            tri: h.iter().map(|h| h.0).collect(),
-            t: h.iter().map(|h| h.1).collect(),
-            occluded: vec![],
-        },
+        Out::Hits(h, _) => hit_results(h.iter().copied()),
         Out::Occ(o, _) => Results {
             occluded: o.clone(),
             ..Default::default()
         },
         Out::Hits8(h, _) | Out::Hits16(h, _) => {
-            let hits: Vec<(u32, f32)> = h
-                .iter()
-                .flat_map(|p| {
-                    (0..8).map(|i| {
-                        p.lane(i)
-                            .map_or((u32::MAX, f32::INFINITY), |h| (h.tri, h.t))
-                    })
-                })
-                .take(n)
-                .collect();
-            results_of(&Out::Hits(hits, intersect1), n)
+            hit_results(h.iter().flat_map(|p| (0..8).map(|i| p.lane(i))).take(n))
         }
         Out::Occ8(o, _) | Out::Occ16(o, _) => Results {
             occluded: o
@@ -331,5 +330,17 @@ pub(super) fn results_of(out: &Out, n: usize) -> Results {
                 .collect(),
             ..Default::default()
         },
+    }
+}
+
+/// Per ray `(triangle, t)`, `(u32::MAX, inf)` on a miss.
+fn hit_results(hits: impl Iterator<Item = Option<Hit>>) -> Results {
+    let (tri, t) = hits
+        .map(|h| h.map_or((u32::MAX, f32::INFINITY), |h| (h.tri, h.t)))
+        .unzip();
+    Results {
+        tri,
+        t,
+        occluded: vec![],
     }
 }
