@@ -388,14 +388,10 @@ pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
 /// If `out` is shorter than `rays`.
 pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
     let out = &mut out[..rays.len()];
-    let done = with_stack(&accel.wide, |bvh, stack| {
-        for (ray, o) in rays.iter().zip(out.iter_mut()) {
-            *o = walk::<false>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack);
-        }
+    out.fill(None);
+    walk_each::<false>(accel, rays.iter().copied().enumerate(), cull, |i, h| {
+        out[i] = Some(h)
     });
-    if done.is_none() {
-        out.fill(None);
-    }
 }
 
 /// `occluded_wide1` on every ray of `rays`, into `out` (the same length), the stack borrowed
@@ -405,41 +401,60 @@ pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [
 /// If `out` is shorter than `rays`.
 pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [bool]) {
     let out = &mut out[..rays.len()];
-    let done = with_stack(&accel.wide, |bvh, stack| {
-        for (ray, o) in rays.iter().zip(out.iter_mut()) {
-            *o = walk::<true>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack).is_some();
+    out.fill(false);
+    walk_each::<true>(accel, rays.iter().copied().enumerate(), cull, |i, _| {
+        out[i] = true
+    });
+}
+
+/// One walk from the root per `(index, ray)`, the thread's stack borrowed once for all of
+/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree). What the batch
+/// entries and the packets' per-lane hand-offs share.
+#[inline(always)]
+fn walk_each<const ANY_HIT: bool>(
+    accel: &Accel,
+    rays: impl Iterator<Item = (usize, Ray)>,
+    cull: bool,
+    mut hit: impl FnMut(usize, Hit),
+) {
+    with_stack(&accel.wide, |bvh, stack| {
+        for (i, ray) in rays {
+            let r = RayWide::new(&ray);
+            if let Some(h) = walk::<ANY_HIT>(accel, bvh, 0, &r, ray.tfar, cull, stack) {
+                hit(i, h);
+            }
         }
     });
-    if done.is_none() {
-        out.fill(false);
-    }
+}
+
+/// The active lanes of a packet as `(lane, ray)`.
+fn active_lanes(rays: &RayPacket8, active: M32x8) -> impl Iterator<Item = (usize, Ray)> {
+    let lanes = Lanes::of(rays);
+    let mut bits = simd::bitmask(active);
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            (i, lanes.ray(i))
+        })
+    })
 }
 
 /// `intersect_wide1` on each active lane of a packet (how the wavefront renderer hands a
 /// queue's packets to the single-ray engine); inactive lanes report no hit.
 pub fn intersect_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> HitPacket8 {
     let mut hits = HitPacket8::none();
-    let mut bits = simd::bitmask(active);
-    if bits == 0 {
+    if simd::bitmask(active) == 0 {
         return hits;
     }
-    let lanes = Lanes::of(rays);
     let (mut tri, mut t, mut b1, mut b2) = (
         simd::u32_lanes(hits.tri),
         simd::lanes(hits.t),
         simd::lanes(hits.b1),
         simd::lanes(hits.b2),
     );
-    with_stack(&accel.wide, |bvh, stack| {
-        while bits != 0 {
-            let i = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let ray = lanes.ray(i);
-            let r = RayWide::new(&ray);
-            if let Some(h) = walk::<false>(accel, bvh, 0, &r, ray.tfar, cull, stack) {
-                (tri[i], t[i], b1[i], b2[i]) = (h.tri, h.t, h.b1, h.b2);
-            }
-        }
+    walk_each::<false>(accel, active_lanes(rays, active), cull, |i, h| {
+        (tri[i], t[i], b1[i], b2[i]) = (h.tri, h.t, h.b1, h.b2);
     });
     hits.tri = simd::u32_from_lanes(tri);
     hits.t = simd::from_lanes(t);
@@ -450,19 +465,9 @@ pub fn intersect_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bo
 
 /// `occluded_wide1` on each active lane of a packet.
 pub fn occluded_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> M32x8 {
-    let mut bits = simd::bitmask(active);
-    let lanes = Lanes::of(rays);
     let mut out = 0;
-    with_stack(&accel.wide, |bvh, stack| {
-        while bits != 0 {
-            let i = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let ray = lanes.ray(i);
-            let r = RayWide::new(&ray);
-            if walk::<true>(accel, bvh, 0, &r, ray.tfar, cull, stack).is_some() {
-                out |= 1 << i;
-            }
-        }
+    walk_each::<true>(accel, active_lanes(rays, active), cull, |i, _| {
+        out |= 1 << i
     });
     simd::mask_from_bits(out)
 }

@@ -170,14 +170,6 @@ impl Engine {
     }
 }
 
-fn hits1(accel: &Accel, f: Intersect1, rays: &[Ray], out: &mut [Option<Hit>]) {
-    f(accel, rays, false, out);
-}
-
-fn occ1(accel: &Accel, f: Occluded1, rays: &[Ray], out: &mut [bool]) {
-    f(accel, rays, false, out);
-}
-
 fn hits8(
     accel: &Accel,
     f: Intersect8,
@@ -245,8 +237,8 @@ pub fn pass(
     let (pr, pa) = (&packets.rays[..], &packets.active[..]);
     let Some(pool) = pool else {
         match out {
-            Out::Hits(o, f) => hits1(accel, *f, rays, o),
-            Out::Occ(o, f) => occ1(accel, *f, rays, o),
+            Out::Hits(o, f) => f(accel, rays, false, o),
+            Out::Occ(o, f) => f(accel, rays, false, o),
             Out::Hits8(o, f) => hits8(accel, *f, pr, pa, o),
             Out::Occ8(o, f) => occ8(accel, *f, pr, pa, o),
             Out::Hits16(o, f) => hits16(accel, *f, pr, pa, o),
@@ -259,11 +251,11 @@ pub fn pass(
         Out::Hits(o, f) => o
             .par_chunks_mut(CHUNK)
             .zip(rays.par_chunks(CHUNK))
-            .for_each(|(o, r)| hits1(accel, *f, r, o)),
+            .for_each(|(o, r)| f(accel, r, false, o)),
         Out::Occ(o, f) => o
             .par_chunks_mut(CHUNK)
             .zip(rays.par_chunks(CHUNK))
-            .for_each(|(o, r)| occ1(accel, *f, r, o)),
+            .for_each(|(o, r)| f(accel, r, false, o)),
         Out::Hits8(o, f) => o
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
