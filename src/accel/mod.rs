@@ -219,10 +219,9 @@ pub fn safe_inv(d: f32) -> f32 {
 /// neighbourhood before reaching the occluder. Where both boxes hold the origin, the one the
 /// ray leaves later goes first (it reaches farther); where neither does, the nearer (a
 /// blocker close to the surface, as under a body's own limbs, is found early). A packet
-/// takes the side most of its lanes prefer; `wide1` with three or more hit children pushes
-/// the boxes the ray starts in first, so they come last (each group in the octant order);
-/// where both hold the origin it keeps the nearer, as carrying exit distances cost it more
-/// instructions (+3.5% on the bench's shadow rays) than the better order saved. An
+/// takes the side most of its lanes prefer. `wide1`'s any-hit walk keeps only the two
+/// groups (the children the ray starts in after the others, each group in slot order, no
+/// distances: see `wide1::walk_any`). An
 /// unoccluded ray visits every box it meets in any order, and any order finds an occluder
 /// when there is one, so answers do not change.
 /// Measured (README, "Engines", instructions of `occluded8`): bench shadow rays 0.85x,
