@@ -514,3 +514,66 @@ fn wide1_batch_entries_fill_every_slot() {
     assert_eq!((hits[1], hits[2]), (None, stale));
     assert_eq!(occ, [true, false, true]);
 }
+
+/// `hybrid16`'s any hit takes 16 rays down the wide tree together, testing a leaf for the
+/// packet when more than `SWITCH_WIDE16` lanes meet it and lane by lane otherwise, and walks a
+/// node's subtree lane by lane once few lanes reach it. Coherent shadow rays (the bench's, on
+/// the kitten: 16 neighbouring surface points towards one light) take every one of those
+/// branches, and the octant-wide slab test; the same rays reversed (from beyond the light
+/// back to the surface points, shortened to end just before them) mostly go unoccluded.
+/// Every lane must equal `occluded1`, culled and not, all lanes active or some.
+#[test]
+fn hybrid16_any_hit_equals_scalar_on_coherent_shadow_rays() {
+    use whitted::bench::{Workload, Workloads, triangles};
+    let (mesh, _) = load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
+    let accel = Accel::build(&triangles(&mesh), BuildQuality::Binned);
+    let work = Workloads::generate(&mesh, &accel, 320, 180);
+    let shadow = work
+        .sets()
+        .into_iter()
+        .find(|(w, _)| *w == Workload::Shadow)
+        .unwrap()
+        .1
+        .to_vec();
+    assert!(shadow.len() > 3000, "{} shadow rays", shadow.len());
+    let reversed: Vec<Ray> = shadow
+        .iter()
+        .map(|r| {
+            let end = r.origin + r.dir * r.tfar;
+            Ray::new(end, -r.dir, 0.0, r.tfar * 0.999)
+        })
+        .collect();
+    let (mut occluded, mut total) = (0, 0);
+    for rays in [&shadow, &reversed] {
+        for cull in [false, true] {
+            for mask in [0xFFFFu16, 0b1011_0111_1110_1101] {
+                for group in rays.chunks(16) {
+                    let half = |h: usize| {
+                        let part = group.get(8 * h..).unwrap_or(&[]);
+                        let (p, active) = RayPacket8::from_fn(|i| part.get(i).copied());
+                        (
+                            p,
+                            active & simd::mask_from_bits((mask >> (8 * h)) as u32 & 0xFF),
+                        )
+                    };
+                    let ((p0, a0), (p1, a1)) = (half(0), half(1));
+                    let got = occluded_hybrid16(&accel, [&p0, &p1], [a0, a1], cull);
+                    for (i, ray) in group.iter().enumerate() {
+                        let (h, lane) = (i / 8, i % 8);
+                        let active = mask >> i & 1 == 1;
+                        let want = active && occluded1(&accel, ray, cull);
+                        let lane_bit = simd::bitmask(got[h]) >> lane & 1 == 1;
+                        assert_eq!(lane_bit, want, "lane {i} of {ray:?}, cull {cull}");
+                        occluded += want as usize;
+                        total += 1;
+                    }
+                }
+            }
+        }
+    }
+    // both outcomes occur in numbers
+    assert!(
+        occluded > total / 10 && occluded < total * 9 / 10,
+        "{occluded} of {total}"
+    );
+}

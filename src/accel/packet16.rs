@@ -1,9 +1,11 @@
 //! 16-ray packets on AVX-512: the packet engine's walk of the binary tree (`traverse8`) with
 //! 16 lanes in one 512-bit register, so each box and triangle test serves twice the rays
 //! for about the instructions of one 8-lane test. Embree traces its 16-wide packets the same
-//! way on these machines. `packet16` never leaves the packet; `hybrid16` hands a node's
-//! lanes to single-ray traversal of the wide tree once at most [`SWITCH16`] remain, as
-//! `hybrid8` does.
+//! way on these machines. `packet16` never leaves the packet. `hybrid16`'s closest hit hands
+//! a node's lanes to single-ray traversal of the wide tree once at most [`SWITCH16`] remain,
+//! as `hybrid8` does; its any hit takes the 16 rays down the wide tree itself
+//! ([`traverse_wide16_any`], Embree's hybrid scheme), each lane alone once at most
+//! [`SWITCH_WIDE16`] remain.
 //!
 //! The build targets x86-64-v3 (AVX2), so these kernels are compiled for AVX-512 on their
 //! own (`#[target_feature]`) and chosen at run time ([`available`]); without AVX-512 the
@@ -76,11 +78,19 @@ pub fn occluded16(
 }
 
 /// Hand a node's lanes to single-ray traversal when at most this many of 16 remain
-/// (`hybrid16`). Kitten incoherent rays (best of 5, one thread): 3 -> 7.78, 6 -> 7.88,
+/// (`hybrid16`'s closest hit). Kitten incoherent rays (best of 5, one thread): 3 -> 7.78, 6 -> 7.88,
 /// 10 -> 7.62 Mrays/s, `hybrid8` 7.15; at 1.3M triangles `hybrid16` and `hybrid8` trace
 /// incoherent rays alike (2.78) and `wide1` faster (3.13; switches of 10 and 14 and leaves
 /// read from the wide blocks did not change that).
 pub const SWITCH16: u32 = 6;
+
+/// `hybrid16`'s any hit ([`traverse_wide16_any`]): a node or leaf reached by at most this
+/// many of 16 lanes is walked or tested by each lane alone. At 1.3M triangles (bench shadow
+/// rays, alternating in one process, medians against `packet16`): 0 (the packet to every
+/// leaf) 1.04x, 4 1.26x, 8 1.21x, 12 1.10x, 14 (Embree's `switchThresholdIncoherent` for
+/// 16-ray packets) 1.05x; 2, 3, 5 and 6 within 3% of 4. On the kitten 4 ran 1.04x
+/// `packet16`, 8 0.97x and 12 0.88x.
+pub const SWITCH_WIDE16: u32 = 4;
 
 /// Closest hits of two packets as one 16-ray hybrid packet: `packet16`'s walk while more
 /// than [`SWITCH16`] lanes share a node, then each remaining lane alone down the wide tree
@@ -97,17 +107,21 @@ pub fn intersect_hybrid16(
     )
 }
 
-/// Occluded lanes of two packets as one 16-ray hybrid packet (any hit).
+/// Occluded lanes of two packets as one 16-ray hybrid packet (any hit) down the wide tree
+/// ([`traverse_wide16_any`]; `hybrid8` on both halves without AVX-512).
 pub fn occluded_hybrid16(
     accel: &Accel,
     rays: [&RayPacket8; 2],
     active: [M32x8; 2],
     cull: bool,
 ) -> [M32x8; 2] {
-    run16::<true, SWITCH16>(accel, rays, active, cull).map_or_else(
-        || [0, 1].map(|h| occluded_hybrid8(accel, rays[h], active[h], cull)),
-        |(_, occ)| halves(occ),
-    )
+    if !available() {
+        return [0, 1].map(|h| occluded_hybrid8(accel, rays[h], active[h], cull));
+    }
+    // SAFETY: `available()` checked that the CPU has AVX-512 F and DQ, the only features
+    // the kernel is compiled for beyond the crate's baseline.
+    #[allow(unsafe_code)]
+    halves(unsafe { traverse_wide16_any(accel, rays, active, cull) })
 }
 
 /// The two packets' masks of 16 lane bits.
@@ -564,6 +578,187 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
             }
         }
     }
+}
+
+/// `hybrid16`'s any hit: the 16 rays down the wide tree together, as Embree's hybrid
+/// packets go down its BVH8. At a node each child's box is tested for the lanes here (one
+/// 16-lane slab test per child, each axis's near and far plane picked once when every lane's
+/// direction lies in one octant, as `hit_box16`); a hit leaf's triangles are tested for its
+/// lanes (`hit_triangle16` on each lane of its blocks), or, when at most [`SWITCH_WIDE16`]
+/// lanes meet it, each lane against the blocks alone (`hit_block1`); hit inner children are
+/// pushed with their lanes. A node reached by at most [`SWITCH_WIDE16`] lanes is walked
+/// below by each of them alone (`wide1::walk_any`, from the node: no descent from the
+/// root). The occluded lanes are `occluded1`'s: every box test is conservative (the padded
+/// boxes, `SLAB_FAR_SCALE`) and every triangle test is the contract's.
+#[target_feature(enable = "avx512f,avx512dq")]
+fn traverse_wide16_any(
+    accel: &Accel,
+    rays: [&RayPacket8; 2],
+    active: [M32x8; 2],
+    cull: bool,
+) -> u16 {
+    let mut active = (simd::bitmask(active[0]) | simd::bitmask(active[1]) << 8) as u16;
+    let bvh = &accel.wide;
+    if bvh.nodes.is_empty() || active == 0 {
+        return 0;
+    }
+    let (mut r, tfar) = rays16(rays);
+    {
+        let neg = [r.inv.x, r.inv.y, r.inv.z]
+            .map(|v| _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(active, v, splat(0.0)));
+        if neg.iter().all(|&b| b == 0 || b == active) {
+            r.octant = Some(neg.map(|b| b != 0));
+        }
+    }
+    let far = _mm512_mul_ps(tfar, splat(SLAB_FAR_SCALE));
+    let tf = lanes16(tfar);
+    let mut occluded = 0u16;
+    // entries: a node and the lanes that met its box.
+    let mut stack: Stack<(u32, u16), 64> = Stack::new();
+    // each lane's splat for the single-ray walks, made when first needed
+    let mut walkers: [Option<RayWide>; 16] = [None; 16];
+    let (mut cur, mut here) = (0u32, active);
+    STACK.with_borrow_mut(|st| {
+        let need = stack_need(bvh);
+        if st.len() < need {
+            st.resize(need, (0, 0.0));
+        }
+        loop {
+            macro_rules! walker {
+                ($i:expr) => {
+                    walkers[$i].get_or_insert_with(|| {
+                        RayWide::new(&Ray::new(
+                            r.o1[$i].into(),
+                            r.d1[$i].into(),
+                            lanes16(r.tnear)[$i],
+                            f32::INFINITY,
+                        ))
+                    })
+                };
+            }
+            if here.count_ones() <= SWITCH_WIDE16 {
+                // few lanes: each walks this subtree alone.
+                let mut bits = here;
+                while bits != 0 {
+                    let i = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let rw = walker!(i);
+                    if walk::<true>(accel, bvh, cur, rw, tf[i], cull, st).is_some() {
+                        occluded |= 1 << i;
+                        active &= !(1 << i);
+                    }
+                }
+                if active == 0 {
+                    return occluded;
+                }
+            } else {
+                // each child's box for the lanes here
+                let node = &bvh.nodes[cur as usize];
+                let mut masks = [0u16; 8];
+                let mut valid = node.valid();
+                while valid != 0 {
+                    let c = valid.trailing_zeros() as usize;
+                    valid &= valid - 1;
+                    let b = |k: usize, axis: usize| -> f32 {
+                        bytemuck::cast::<_, [f32; 8]>(node.bounds[k][axis])[c]
+                    };
+                    masks[c] = if let Some(near) = r.octant {
+                        let t = |bound: f32, o: __m512, inv: __m512| {
+                            _mm512_mul_ps(_mm512_sub_ps(splat(bound), o), inv)
+                        };
+                        let n = |axis: usize| near[axis] as usize;
+                        let nx = t(b(n(0), 0), r.o.x, r.inv.x);
+                        let fx = t(b(1 - n(0), 0), r.o.x, r.inv_far.x);
+                        let ny = t(b(n(1), 1), r.o.y, r.inv.y);
+                        let fy = t(b(1 - n(1), 1), r.o.y, r.inv_far.y);
+                        let nz = t(b(n(2), 2), r.o.z, r.inv.z);
+                        let fz = t(b(1 - n(2), 2), r.o.z, r.inv_far.z);
+                        let lo = _mm512_max_ps(_mm512_max_ps(nx, ny), _mm512_max_ps(nz, r.tnear));
+                        let hi = _mm512_min_ps(_mm512_min_ps(fx, fy), _mm512_min_ps(fz, far));
+                        _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(here, lo, hi)
+                    } else {
+                        // mixed octants: both planes of each axis, as `hit_box16`
+                        let n = super::Node {
+                            min: [b(0, 0), b(0, 1), b(0, 2)],
+                            max: [b(1, 0), b(1, 1), b(1, 2)],
+                            count: 0,
+                            first: 0,
+                        };
+                        hit_box16(&n, &r, tfar, here).0
+                    };
+                }
+                // hit leaves: for the packet, or lane by lane when few lanes meet them
+                let leaves = node.leaves() & node.valid();
+                let mut lm = leaves;
+                while lm != 0 {
+                    let c = lm.trailing_zeros() as usize;
+                    lm &= lm - 1;
+                    let m = masks[c] & active;
+                    if m == 0 {
+                        continue;
+                    }
+                    let (first, count) = super::wide::leaf_blocks(node.child[c]);
+                    if m.count_ones() <= SWITCH_WIDE16 {
+                        let mut bits = m;
+                        while bits != 0 {
+                            let i = bits.trailing_zeros() as usize;
+                            bits &= bits - 1;
+                            let rw = walker!(i);
+                            for block in first..first + count {
+                                if super::wide1::hit_block1::<true>(accel, block, rw, tf[i], cull)
+                                    .is_some()
+                                {
+                                    occluded |= 1 << i;
+                                    active &= !(1 << i);
+                                    break;
+                                }
+                            }
+                        }
+                    } else {
+                        for block in first..first + count {
+                            let blk = &bvh.blocks[block];
+                            let leaf = super::packet::BlockLeaf::new(blk, blk.triangles() as u32);
+                            let mut lanes = m & active;
+                            for j in 0..leaf.len() {
+                                if lanes == 0 {
+                                    break;
+                                }
+                                let (hit, ..) =
+                                    hit_triangle16!(accel, &leaf, j, &r, tfar, lanes, cull);
+                                occluded |= hit;
+                                active &= !hit;
+                                lanes &= !hit;
+                            }
+                        }
+                    }
+                    if active == 0 {
+                        return occluded;
+                    }
+                }
+                // hit inner children pushed with their lanes (slot order)
+                let mut inner = node.valid() & !leaves;
+                while inner != 0 {
+                    let c = inner.trailing_zeros() as usize;
+                    inner &= inner - 1;
+                    let m = masks[c] & active;
+                    if m != 0 {
+                        stack.push((node.child[c], m));
+                    }
+                }
+            }
+            // pop the next node some lane still unoccluded met
+            loop {
+                let Some((next, bits)) = stack.pop() else {
+                    return occluded;
+                };
+                let m = bits & active;
+                if m != 0 {
+                    (cur, here) = (next, m);
+                    break;
+                }
+            }
+        }
+    })
 }
 
 #[cfg(test)]
