@@ -521,9 +521,10 @@ fn wide1_batch_entries_fill_every_slot() {
 /// the kitten: 16 neighbouring surface points towards one light) take every one of those
 /// branches, and the octant-wide slab test; the same rays reversed (from beyond the light
 /// back to the surface points, shortened to end just before them) mostly go unoccluded.
-/// Every lane must equal `occluded1`, culled and not, all lanes active or some.
+/// Every lane must equal `occluded1`, culled and not, all lanes active or some. Closest hit
+/// likewise on the camera rays that hit and the reversed shadow rays: `intersect1` bit for bit.
 #[test]
-fn hybrid16_any_hit_equals_scalar_on_coherent_shadow_rays() {
+fn hybrid16_wide_packets_equal_scalar_on_coherent_rays() {
     use whitted::bench::{Workload, Workloads, triangles};
     let (mesh, _) = load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
     let accel = Accel::build(&triangles(&mesh), BuildQuality::Binned);
@@ -576,4 +577,50 @@ fn hybrid16_any_hit_equals_scalar_on_coherent_shadow_rays() {
         occluded > total / 10 && occluded < total * 9 / 10,
         "{occluded} of {total}"
     );
+
+    // closest hit: packets sharing an octant go down the wide tree together too; the
+    // camera rays that hit (primary-hits-only) and the reversed shadow rays
+    let camera = work
+        .sets()
+        .into_iter()
+        .find(|(w, _)| *w == Workload::PrimaryHits)
+        .unwrap()
+        .1
+        .to_vec();
+    let bits_of =
+        |h: Option<Hit>| h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()));
+    let (mut hit, mut total) = (0, 0);
+    for rays in [&camera, &reversed] {
+        for cull in [false, true] {
+            for mask in [0xFFFFu16, 0b1011_0111_1110_1101] {
+                for group in rays.chunks(16) {
+                    let half = |h: usize| {
+                        let part = group.get(8 * h..).unwrap_or(&[]);
+                        let (p, active) = RayPacket8::from_fn(|i| part.get(i).copied());
+                        (
+                            p,
+                            active & simd::mask_from_bits((mask >> (8 * h)) as u32 & 0xFF),
+                        )
+                    };
+                    let ((p0, a0), (p1, a1)) = (half(0), half(1));
+                    let got = intersect_hybrid16(&accel, [&p0, &p1], [a0, a1], cull);
+                    for (i, ray) in group.iter().enumerate() {
+                        let want = if mask >> i & 1 == 1 {
+                            intersect1(&accel, ray, cull)
+                        } else {
+                            None
+                        };
+                        assert_eq!(
+                            bits_of(got[i / 8].lane(i % 8)),
+                            bits_of(want),
+                            "lane {i} of {ray:?}, cull {cull}"
+                        );
+                        hit += want.is_some() as usize;
+                        total += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(hit > total / 10, "{hit} of {total}");
 }
