@@ -12,7 +12,7 @@ use rayon::prelude::*;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Engine {
     /// The fastest kernel per kind of ray, chosen by measurement: in the renderer per queue
-    /// (`render::wavefront::AUTO`), for bare ray batches `packet`.
+    /// (`render::wavefront::auto`), for bare ray batches `packet`.
     #[default]
     Auto,
     /// `intersect8` on packets of 8 consecutive rays over the binary tree.

@@ -154,10 +154,14 @@ fn each_packet<T>(
 pub struct Kernels {
     /// Camera rays (generation 0).
     pub camera: Kernel,
-    /// Shadow rays of every generation.
+    /// Shadow rays of camera-ray hits (generation 0).
     pub shadow: Kernel,
-    /// Reflection and refraction rays (generations 1 and on).
+    /// Reflection and refraction rays of camera-ray hits (generation 1, in pixel order).
     pub secondary: Kernel,
+    /// Shadow rays of later generations (from the hits of reflection and refraction rays).
+    pub shadow_later: Kernel,
+    /// Reflection and refraction rays of generations 2 and on (binned by direction octant).
+    pub secondary_later: Kernel,
 }
 
 /// `--engine auto`: the kernel per queue, by measurement (README, "Engines"). Camera rays are
@@ -166,16 +170,35 @@ pub struct Kernels {
 /// ~7.6, wide1 ~4.9). Reflection and refraction rays are coherent off `phong`'s floor (packet
 /// twice as fast as wide there) and scattered after a refraction (bench incoherent: wide1
 /// ~3.7, hybrid8 ~3.4, packet8 ~2.8), so they go hybrid, which keeps a packet while its lanes
-/// agree. On the `refraction` render all kernels measured within the noise of each other.
-/// 16-ray packets (`Packet16`, AVX-512) for camera and shadow rays rendered in the same time
-/// (1920x1080, one thread, 7 alternating runs, whole-process CPU time: `phong` 1.01x,
-/// `cubemap` 1.00x, `refraction` 1.02x; same bytes): a render's queues are tile-local and
-/// its camera and shadow phases are a fifth of the time, so packets of 8 stay.
-pub const AUTO: Kernels = Kernels {
-    camera: Kernel::Packet,
-    shadow: Kernel::Packet,
-    secondary: Kernel::Hybrid,
-};
+/// agree. 16-ray packets (`Packet16`, AVX-512) for camera and shadow rays rendered in the
+/// same time (1920x1080, one thread, 7 alternating runs, whole-process CPU time: `phong`
+/// 1.01x, `cubemap` 1.00x, `refraction` 1.02x; same bytes): a render's queues are tile-local
+/// and its camera and shadow phases are a fifth of the time, so packets of 8 stay there.
+///
+/// Later generations on AVX-512 take `Hybrid16`, whose 16 rays go down the wide tree together
+/// when they share a direction octant, as the binned queues' packets mostly do (`refraction`
+/// at 1920x1080 on one thread, `--stats`, two runs each: the later shadow rays' phase took
+/// 0.130-0.133 thread-s against packet8's 0.198-0.212, the binned reflection and refraction
+/// rays 0.62-0.66 against hybrid8's 0.71-0.81; `phong`, whose later generations are few,
+/// level). The rays of camera-ray hits stay on packets of 8: on `phong` `Hybrid16` took its
+/// shadow phase from 0.097 to 0.122 thread-s and its reflections from 0.046 to 0.059. Without
+/// AVX-512 `Hybrid16` is two `hybrid8` calls, so the 8-ray kernels stay everywhere.
+pub fn auto() -> Kernels {
+    let later = |k| {
+        if crate::accel::packet16::available() {
+            Kernel::Hybrid16
+        } else {
+            k
+        }
+    };
+    Kernels {
+        camera: Kernel::Packet,
+        shadow: Kernel::Packet,
+        secondary: Kernel::Hybrid,
+        shadow_later: later(Kernel::Packet),
+        secondary_later: later(Kernel::Hybrid),
+    }
+}
 
 impl Kernels {
     /// The kernels an engine uses (`Scalar` has its own renderer; here it maps to `Packet`).
@@ -184,9 +207,11 @@ impl Kernels {
             camera: k,
             shadow: k,
             secondary: k,
+            shadow_later: k,
+            secondary_later: k,
         };
         match engine {
-            Engine::Auto => AUTO,
+            Engine::Auto => auto(),
             Engine::Wide => all(Kernel::Wide),
             Engine::Hybrid => all(Kernel::Hybrid),
             Engine::Packet16 => all(Kernel::Packet16),
@@ -267,10 +292,10 @@ pub fn render_tile(
     let mut generation = 0;
     while !rays.is_empty() {
         let start = Instant::now();
-        let kernel = if generation == 0 {
-            kernels.camera
-        } else {
-            kernels.secondary
+        let kernel = match generation {
+            0 => kernels.camera,
+            1 => kernels.secondary,
+            _ => kernels.secondary_later,
         };
         intersect_closest(world, kernel, rays, hits, unique);
         counts[4] += rays.twins.count() as u64;
@@ -300,7 +325,12 @@ pub fn render_tile(
         let start = Instant::now();
         counts[1] += shadows.len() as u64;
         counts[5] += shadows.twins.count() as u64;
-        trace_shadow_rays(world, kernels.shadow, shadows, accum, (unique, occluded));
+        let kernel = if generation == 0 {
+            kernels.shadow
+        } else {
+            kernels.shadow_later
+        };
+        trace_shadow_rays(world, kernel, shadows, accum, (unique, occluded));
         shadows.clear();
         phase_ns[2] += start.elapsed().as_nanos() as u64;
 
