@@ -20,7 +20,7 @@ use super::scalar::{BARY_SAFE, Stack, inside_f64};
 use super::tri_soa::Leaf;
 use super::wide::NO_ENTRY;
 use super::wide1::{RayWide, STACK, stack_need, walk};
-use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
+use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::{Hit, Ray};
 use crate::simd::{self, M32x8};
@@ -168,14 +168,6 @@ struct V3 {
     z: __m512,
 }
 
-/// The lanes of two 8-lane values, the first packet's in lanes `0..8`.
-fn join(a: [f32; 8], b: [f32; 8]) -> __m512 {
-    let mut v = [0.0f32; 16];
-    v[..8].copy_from_slice(&a);
-    v[8..].copy_from_slice(&b);
-    bytemuck::cast(v)
-}
-
 /// The 16 lanes as an array.
 fn lanes16(v: __m512) -> [f32; 16] {
     bytemuck::cast(v)
@@ -230,9 +222,23 @@ struct Rays16 {
     octant: Option<[bool; 3]>,
     tnear: __m512,
     dlen: __m512,
-    /// Origins and directions per lane (for the f64 edge test and the single-ray walks).
-    o1: [[f32; 3]; 16],
-    d1: [[f32; 3]; 16],
+    /// Origins and directions as arrays, component by component (for the f64 edge test and
+    /// the single-ray walks: see [`Rays16::o1`], [`Rays16::d1`]).
+    o_lanes: [[f32; 16]; 3],
+    d_lanes: [[f32; 16]; 3],
+}
+
+impl Rays16 {
+    /// Lane `i`'s origin.
+    #[inline(always)]
+    fn o1(&self, i: usize) -> [f32; 3] {
+        self.o_lanes.map(|c| c[i])
+    }
+    /// Lane `i`'s direction.
+    #[inline(always)]
+    fn d1(&self, i: usize) -> [f32; 3] {
+        self.d_lanes.map(|c| c[i])
+    }
 }
 
 /// The two packets as one (`safe_inv` and `|d|` per lane as `traverse8` computes them), and
@@ -241,25 +247,32 @@ struct Rays16 {
 #[inline]
 fn rays16(rays: [&RayPacket8; 2]) -> (Rays16, __m512) {
     let [a, b] = rays;
-    let (oa, ob, da, db) = (
-        a.o.to_lanes(),
-        b.o.to_lanes(),
-        a.d.to_lanes(),
-        b.d.to_lanes(),
-    );
-    let v3 = |p: [[f32; 8]; 3], q: [[f32; 8]; 3], f: fn(f32) -> f32| V3 {
-        x: join(p[0].map(f), q[0].map(f)),
-        y: join(p[1].map(f), q[1].map(f)),
-        z: join(p[2].map(f), q[2].map(f)),
+    // lanes 0..8 from the first packet, 8..16 from the second
+    let join = |p: simd::F32x8, q: simd::F32x8| -> __m512 {
+        _mm512_insertf32x8::<1>(_mm512_castps256_ps512(bytemuck::cast(p)), bytemuck::cast(q))
     };
-    let d = v3(da, db, |v| v);
-    let lane = |p: &[[f32; 8]; 3], q: &[[f32; 8]; 3], i: usize| {
-        let s = if i < 8 { p } else { q };
-        [s[0][i % 8], s[1][i % 8], s[2][i % 8]]
+    let v3 = |p: &simd::Vec3x8, q: &simd::Vec3x8| V3 {
+        x: join(p.x, q.x),
+        y: join(p.y, q.y),
+        z: join(p.z, q.z),
     };
-    let inv = v3(da, db, safe_inv);
+    let (o, d) = (v3(&a.o, &b.o), v3(&a.d, &b.d));
+    // `safe_inv` in lanes: 1 / d, with |d| below TINY replaced by TINY of d's sign (the same
+    // comparison, the same division; NaN stays NaN)
+    let inv1 = |d: __m512| {
+        const TINY: f32 = 1e-30;
+        let sign = _mm512_set1_ps(-0.0);
+        let tiny = _mm512_or_ps(_mm512_and_ps(d, sign), splat(TINY));
+        let small = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_andnot_ps(sign, d), splat(TINY));
+        _mm512_div_ps(splat(1.0), _mm512_mask_mov_ps(d, small, tiny))
+    };
+    let inv = V3 {
+        x: inv1(d.x),
+        y: inv1(d.y),
+        z: inv1(d.z),
+    };
     let r = Rays16 {
-        o: v3(oa, ob, |v| v),
+        o,
         d,
         inv,
         inv_far: V3 {
@@ -268,12 +281,12 @@ fn rays16(rays: [&RayPacket8; 2]) -> (Rays16, __m512) {
             z: _mm512_mul_ps(inv.z, splat(SLAB_FAR_SCALE)),
         },
         octant: None,
-        tnear: join(simd::lanes(a.tnear), simd::lanes(b.tnear)),
+        tnear: join(a.tnear, b.tnear),
         dlen: _mm512_sqrt_ps(dot(d, d)),
-        o1: std::array::from_fn(|i| lane(&oa, &ob, i)),
-        d1: std::array::from_fn(|i| lane(&da, &db, i)),
+        o_lanes: [lanes16(o.x), lanes16(o.y), lanes16(o.z)],
+        d_lanes: [lanes16(d.x), lanes16(d.y), lanes16(d.z)],
     };
-    (r, join(simd::lanes(a.tfar), simd::lanes(b.tfar)))
+    (r, join(a.tfar, b.tfar))
 }
 
 /// `hit_box8` in 16 lanes: the lanes of `active` whose ray meets the box within
@@ -395,7 +408,7 @@ macro_rules! hit_triangle16 {
             while unsure != 0 {
                 let lane = unsure.trailing_zeros() as usize;
                 unsure &= unsure - 1;
-                if inside_f64(accel, leaf.slot(j), r.o1[lane], r.d1[lane]) {
+                if inside_f64(accel, leaf.slot(j), r.o1(lane), r.d1(lane)) {
                     hit |= 1 << lane;
                 }
             }
@@ -497,8 +510,8 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                     // (each lane's splat built once per packet)
                     let rw = walkers[i].get_or_insert_with(|| {
                         RayWide::new(&Ray::new(
-                            r.o1[i].into(),
-                            r.d1[i].into(),
+                            r.o1(i).into(),
+                            r.d1(i).into(),
                             lanes16(r.tnear)[i],
                             f32::INFINITY,
                         ))
@@ -656,8 +669,8 @@ fn traverse_wide16_any(
                 ($i:expr) => {
                     walkers[$i].get_or_insert_with(|| {
                         RayWide::new(&Ray::new(
-                            r.o1[$i].into(),
-                            r.d1[$i].into(),
+                            r.o1($i).into(),
+                            r.d1($i).into(),
                             lanes16(r.tnear)[$i],
                             f32::INFINITY,
                         ))
@@ -841,8 +854,8 @@ fn traverse_wide16_closest(
                 ($i:expr) => {
                     walkers[$i].get_or_insert_with(|| {
                         RayWide::new(&Ray::new(
-                            r.o1[$i].into(),
-                            r.d1[$i].into(),
+                            r.o1($i).into(),
+                            r.d1($i).into(),
                             lanes16(r.tnear)[$i],
                             f32::INFINITY,
                         ))
@@ -1034,6 +1047,58 @@ mod tests {
             let got = lanes16(unsafe { next_up(bytemuck::cast(lanes)) });
             for (g, v) in got.iter().zip(lanes) {
                 assert_eq!(g.to_bits(), v.next_up().to_bits(), "{v:e}");
+            }
+        }
+    }
+
+    /// The packet's reciprocal directions in lanes are `safe_inv` bit for bit: zeros of both
+    /// signs, values below and at the clamp, subnormals, infinities and NaN.
+    #[test]
+    fn lane_safe_inv_equals_safe_inv() {
+        if !available() {
+            eprintln!("no AVX-512 here: the 16-lane kernels are not run");
+            return;
+        }
+        let mut values = crate::simd::finite_samples();
+        values.extend([
+            0.0,
+            -0.0,
+            1e-30,
+            -1e-30,
+            1e-30f32.next_down(),
+            -1e-30f32.next_up(),
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ]);
+        for chunk in values.chunks(16) {
+            let v = |i: usize| chunk.get(i).copied().unwrap_or(1.0);
+            let packet = |h: usize| {
+                RayPacket8::from_fn(|i| {
+                    let k = 8 * h + i;
+                    Some(Ray::new(
+                        glam::Vec3::ZERO,
+                        glam::Vec3::new(v(k), v((k + 5) % 16), -v((k + 11) % 16)),
+                        0.0,
+                        f32::INFINITY,
+                    ))
+                })
+                .0
+            };
+            let (p0, p1) = (packet(0), packet(1));
+            // SAFETY: the CPU has AVX-512 F and DQ (checked above).
+            #[allow(unsafe_code)]
+            let (r, _) = unsafe { rays16([&p0, &p1]) };
+            for (axis, inv) in [r.inv.x, r.inv.y, r.inv.z].into_iter().enumerate() {
+                for (i, got) in lanes16(inv).into_iter().enumerate() {
+                    let d = r.d1(i)[axis];
+                    let want = super::super::safe_inv(d);
+                    assert!(
+                        got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                        "safe_inv({d:e}): {got:e} against {want:e}"
+                    );
+                }
             }
         }
     }
