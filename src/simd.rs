@@ -56,6 +56,15 @@ pub fn ge(a: F32x8, b: F32x8) -> M32x8 {
 pub fn eq(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_eq(b)
 }
+/// [`crate::accel::safe_inv`] per lane: the same comparison, the same replacement and the
+/// same division, so the same floats (NaN stays NaN). One division for 8 lanes instead of 8:
+/// it was a quarter of `packet8`'s per-packet set-up on camera rays.
+#[inline(always)]
+pub fn safe_inv(v: F32x8) -> F32x8 {
+    let tiny = splat(crate::accel::SAFE_INV_TINY);
+    let signed = (v & splat(-0.0)) | tiny;
+    splat(1.0) / select(lt(v.abs(), tiny), signed, v)
+}
 /// `m ? a : b` per lane.
 #[inline(always)]
 pub fn select(m: M32x8, a: F32x8, b: F32x8) -> F32x8 {
@@ -309,6 +318,37 @@ mod tests {
             let v: [f32; 8] = std::array::from_fn(|i| chunk[i]);
             for (g, v) in lanes(next_up(from_lanes(v))).iter().zip(v) {
                 assert_eq!(g.to_bits(), v.next_up().to_bits(), "{v:e}");
+            }
+        }
+    }
+
+    /// `safe_inv` in lanes is `accel::safe_inv` bit for bit: zeros of both signs, the
+    /// clamp's edges, subnormals, the largest values, infinities and NaN.
+    #[test]
+    fn lane_safe_inv_equals_safe_inv() {
+        let tiny = crate::accel::SAFE_INV_TINY;
+        let mut values = finite_samples();
+        values.extend([
+            0.0,
+            -0.0,
+            tiny,
+            -tiny,
+            tiny.next_down(),
+            -tiny.next_down(),
+            tiny.next_up(),
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ]);
+        for chunk in values.chunks(8) {
+            let v: [f32; 8] = std::array::from_fn(|i| chunk.get(i).copied().unwrap_or(1.0));
+            for (g, v) in lanes(safe_inv(from_lanes(v))).iter().zip(v) {
+                let want = crate::accel::safe_inv(v);
+                assert!(
+                    g.to_bits() == want.to_bits() || (g.is_nan() && want.is_nan()),
+                    "safe_inv({v:e}): {g:e} against {want:e}"
+                );
             }
         }
     }

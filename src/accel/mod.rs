@@ -209,9 +209,16 @@ pub const BOX_PAD: f32 = 4.0 * f32::EPSILON;
 /// so `(bound - origin) * inv` is never `0 * inf = NaN` for a ray starting on a slab plane.
 #[inline(always)]
 pub fn safe_inv(d: f32) -> f32 {
-    const TINY: f32 = 1e-30;
-    1.0 / if d.abs() < TINY { TINY.copysign(d) } else { d }
+    1.0 / if d.abs() < SAFE_INV_TINY {
+        SAFE_INV_TINY.copysign(d)
+    } else {
+        d
+    }
 }
+
+/// The smallest direction component magnitude [`safe_inv`] divides by (`simd::safe_inv` and
+/// the 16-lane set-up clamp the same way).
+pub const SAFE_INV_TINY: f32 = 1e-30;
 
 /// Any-hit walks (shadow rays) visit a child box the ray starts in after one it does not.
 /// A shadow ray starts on a surface, so the boxes around its origin hold the triangles it

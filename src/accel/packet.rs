@@ -8,7 +8,7 @@ use super::hybrid8::hand_off;
 use super::scalar::{BARY_SAFE, inside_f64};
 use super::tri_soa::Leaf;
 use super::wide::{LEAF_BIT, NO_ENTRY, TriBlock8, leaf_blocks};
-use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
+use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8, U32x8, Vec3x8};
@@ -217,9 +217,9 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
     }
     let d = rays.d;
     let inv = Vec3x8::new(
-        simd::from_lanes(simd::lanes(d.x).map(safe_inv)),
-        simd::from_lanes(simd::lanes(d.y).map(safe_inv)),
-        simd::from_lanes(simd::lanes(d.z).map(safe_inv)),
+        simd::safe_inv(d.x),
+        simd::safe_inv(d.y),
+        simd::safe_inv(d.z),
     );
     let mut tfar = rays.tfar;
     let dlen = simd::sqrt(rays.d.dot(rays.d));

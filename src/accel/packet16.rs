@@ -260,7 +260,7 @@ fn rays16(rays: [&RayPacket8; 2]) -> (Rays16, __m512) {
     // `safe_inv` in lanes: 1 / d, with |d| below TINY replaced by TINY of d's sign (the same
     // comparison, the same division; NaN stays NaN)
     let inv1 = |d: __m512| {
-        const TINY: f32 = 1e-30;
+        const TINY: f32 = super::SAFE_INV_TINY;
         let sign = _mm512_set1_ps(-0.0);
         let tiny = _mm512_or_ps(_mm512_and_ps(d, sign), splat(TINY));
         let small = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_andnot_ps(sign, d), splat(TINY));
