@@ -22,7 +22,7 @@ use super::wide::NO_ENTRY;
 use super::wide1::{RayWide, STACK, stack_need, walk};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
 use crate::packet::{HitPacket8, RayPacket8};
-use crate::ray::{Hit, Ray};
+use crate::ray::Hit;
 use crate::simd::{self, M32x8};
 use std::arch::x86_64::*;
 
@@ -78,11 +78,14 @@ pub fn occluded16(
 }
 
 /// Hand a node's lanes to single-ray traversal when at most this many of 16 remain
-/// (`hybrid16`'s closest hit). Kitten incoherent rays (best of 5, one thread): 3 -> 7.78, 6 -> 7.88,
-/// 10 -> 7.62 Mrays/s, `hybrid8` 7.15; at 1.3M triangles `hybrid16` and `hybrid8` trace
-/// incoherent rays alike (2.78) and `wide1` faster (3.13; switches of 10 and 14 and leaves
-/// read from the wide blocks did not change that).
-pub const SWITCH16: u32 = 6;
+/// (`hybrid16`'s closest hit of packets with mixed octants, i.e. incoherent rays). Set to 6
+/// when a hand-off rebuilt each lane's splat from scratch (kitten incoherent rays, best of 5,
+/// one thread: 3 -> 7.78, 6 -> 7.88, 10 -> 7.62 Mrays/s). With the splats taken from the
+/// packet's lanes (`Rays16::walker`), the bench's incoherent rays at 1.3M triangles, against
+/// `wide1` alternating in one process (medians of 9 and 15 passes): 6 0.95x and 1.01x, 8
+/// 1.01x, 10 1.01x and 1.06x, 12 1.01x and 1.05x, 14 1.00x, 16 (every lane at the root)
+/// 0.91x; on the kitten 10 ran 1.02x and 12 1.00x the rate of 6.
+pub const SWITCH16: u32 = 10;
 
 /// `hybrid16`'s any hit ([`traverse_wide16_any`]): a node or leaf reached by at most this
 /// many of 16 lanes is walked or tested by each lane alone. At 1.3M triangles (bench shadow
@@ -229,6 +232,19 @@ struct Rays16 {
 }
 
 impl Rays16 {
+    /// Lane `i` splatted for the single-ray walks, from the lanes' reciprocals and lengths
+    /// (the floats `RayWide::new` computes).
+    #[inline(always)]
+    fn walker(&self, i: usize) -> RayWide {
+        let lane = |v: __m512| lanes16(v)[i];
+        RayWide::from_parts(
+            self.o1(i),
+            self.d1(i),
+            [lane(self.inv.x), lane(self.inv.y), lane(self.inv.z)],
+            lane(self.dlen),
+            lane(self.tnear),
+        )
+    }
     /// Lane `i`'s origin.
     #[inline(always)]
     fn o1(&self, i: usize) -> [f32; 3] {
@@ -508,14 +524,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
                     // (each lane's splat built once per packet)
-                    let rw = walkers[i].get_or_insert_with(|| {
-                        RayWide::new(&Ray::new(
-                            r.o1(i).into(),
-                            r.d1(i).into(),
-                            lanes16(r.tnear)[i],
-                            f32::INFINITY,
-                        ))
-                    });
+                    let rw = walkers[i].get_or_insert_with(|| r.walker(i));
                     let Some(h) = walk::<ANY_HIT>(accel, &accel.wide, entry, rw, tf[i], cull, st)
                     else {
                         continue;
@@ -667,14 +676,7 @@ fn traverse_wide16_any(
         loop {
             macro_rules! walker {
                 ($i:expr) => {
-                    walkers[$i].get_or_insert_with(|| {
-                        RayWide::new(&Ray::new(
-                            r.o1($i).into(),
-                            r.d1($i).into(),
-                            lanes16(r.tnear)[$i],
-                            f32::INFINITY,
-                        ))
-                    })
+                    walkers[$i].get_or_insert_with(|| r.walker($i))
                 };
             }
             if here.count_ones() <= SWITCH_WIDE16 {
@@ -852,14 +854,7 @@ fn traverse_wide16_closest(
         loop {
             macro_rules! walker {
                 ($i:expr) => {
-                    walkers[$i].get_or_insert_with(|| {
-                        RayWide::new(&Ray::new(
-                            r.o1($i).into(),
-                            r.d1($i).into(),
-                            lanes16(r.tnear)[$i],
-                            f32::INFINITY,
-                        ))
-                    })
+                    walkers[$i].get_or_insert_with(|| r.walker($i))
                 };
             }
             // record a lane's hit found below its limit (as the hand-off of `traverse16`)
@@ -1029,6 +1024,7 @@ fn traverse_wide16_closest(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ray::Ray;
 
     /// `next_up` in lanes is `f32::next_up` on every finite value (a hit's `t`), including
     /// zeros of both signs, subnormals, negatives and the largest finite value.

@@ -46,20 +46,27 @@ impl RayWide {
     pub fn new(ray: &Ray) -> RayWide {
         let o1 = ray.origin.to_array();
         let d1 = ray.dir.to_array();
-        let inv = d1.map(safe_inv);
+        // |d| as Ray1 computes it, so the grazing margin is the same float.
+        let dlen = (d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt();
+        RayWide::from_parts(o1, d1, d1.map(safe_inv), dlen, ray.tnear)
+    }
+
+    /// Splat a ray whose reciprocal direction ([`safe_inv`] per component) and length
+    /// (`sqrt((x x + y y) + z z)`) are already known, as a packet has them in its lanes.
+    #[inline(always)]
+    pub fn from_parts(o1: [f32; 3], d1: [f32; 3], inv: [f32; 3], dlen: f32, tnear: f32) -> RayWide {
         let near = inv.map(|v| (v < 0.0) as usize);
         RayWide {
             o: Vec3x8::splat(o1),
             d: Vec3x8::splat(d1),
-            // |d| as Ray1 computes it, so the grazing margin is the same float.
-            dlen: simd::splat((d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt()),
+            dlen: simd::splat(dlen),
             inv: Vec3x8::splat(inv),
             inv_far: Vec3x8::splat(inv.map(|v| v * SLAB_FAR_SCALE)),
             near,
             octant: near[0] | near[1] << 1 | near[2] << 2,
             o1,
             d1,
-            tnear: ray.tnear,
+            tnear,
         }
     }
 }
