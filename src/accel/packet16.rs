@@ -4,7 +4,7 @@
 //! way on these machines. `packet16` never leaves the packet. `hybrid16`'s closest hit hands
 //! a node's lanes to single-ray traversal of the wide tree once at most [`SWITCH16`] remain,
 //! as `hybrid8` does; its any hit takes the 16 rays down the wide tree itself
-//! ([`traverse_wide16_any`], Embree's hybrid scheme), each lane alone once at most
+//! (`traverse_wide16_any`, Embree's hybrid scheme), each lane alone once at most
 //! [`SWITCH_WIDE16`] remain.
 //!
 //! The build targets x86-64-v3 (AVX2), so these kernels are compiled for AVX-512 on their
@@ -87,7 +87,7 @@ pub fn occluded16(
 /// 0.91x; on the kitten 10 ran 1.02x and 12 1.00x the rate of 6.
 pub const SWITCH16: u32 = 10;
 
-/// `hybrid16`'s any hit ([`traverse_wide16_any`]): a node or leaf reached by at most this
+/// `hybrid16`'s any hit (`traverse_wide16_any`): a node or leaf reached by at most this
 /// many of 16 lanes is walked or tested by each lane alone. At 1.3M triangles (bench shadow
 /// rays, alternating in one process, medians against `packet16`): 0 (the packet to every
 /// leaf) 1.04x, 4 1.26x, 8 1.21x, 12 1.10x, 14 (Embree's `switchThresholdIncoherent` for
@@ -97,7 +97,7 @@ pub const SWITCH_WIDE16: u32 = 4;
 
 /// Closest hits of two packets as one 16-ray hybrid packet. When the active lanes' directions
 /// share an octant (camera rays, coherent reflections) the 16 rays go down the wide tree
-/// together ([`traverse_wide16_closest`]); otherwise `packet16`'s walk of the binary tree
+/// together (`traverse_wide16_closest`); otherwise `packet16`'s walk of the binary tree
 /// while more than [`SWITCH16`] lanes share a node, then each remaining lane alone down the
 /// wide tree (`hybrid8` on both halves without AVX-512).
 ///
@@ -139,7 +139,7 @@ fn one_octant(rays: [&RayPacket8; 2], active: [M32x8; 2]) -> bool {
 }
 
 /// Occluded lanes of two packets as one 16-ray hybrid packet (any hit) down the wide tree
-/// ([`traverse_wide16_any`]; `hybrid8` on both halves without AVX-512).
+/// (`traverse_wide16_any`; `hybrid8` on both halves without AVX-512).
 pub fn occluded_hybrid16(
     accel: &Accel,
     rays: [&RayPacket8; 2],
@@ -805,7 +805,7 @@ fn traverse_wide16_any(
 }
 
 /// `hybrid16`'s closest hit for packets whose lanes share a direction octant: the 16 rays
-/// down the wide tree together, as [`traverse_wide16_any`], with each lane's closest hit so
+/// down the wide tree together, as `traverse_wide16_any`, with each lane's closest hit so
 /// far kept in lanes. A node's hit leaves are tested first (for the packet, or lane by lane
 /// when at most [`SWITCH_WIDE16`] lanes meet them, each skipped by the lanes whose hit lies
 /// before its box), then its hit inner children are pushed farthest first in the octant's
