@@ -25,8 +25,9 @@ pub enum Engine {
     /// `intersect16` on packets of 16 consecutive rays over the binary tree (AVX-512; two
     /// `intersect8` calls on a CPU without it).
     Packet16,
-    /// `intersect_hybrid16`: 16-ray packets that hand their last few lanes to single-ray
-    /// traversal of the 8-wide tree (AVX-512; two `intersect_hybrid8` calls without it).
+    /// `intersect_hybrid16`: 16-ray packets down the 8-wide tree together when their lanes
+    /// share a direction octant, else down the binary tree, each lane alone down the 8-wide
+    /// tree once few remain (AVX-512; two `intersect_hybrid8` calls without it).
     Hybrid16,
     /// `intersect1` ray by ray over the binary tree (the reference).
     Scalar,

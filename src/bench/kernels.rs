@@ -135,8 +135,10 @@ pub enum Engine {
     /// `intersect16` / `occluded16` on the binary tree, 16 consecutive rays (AVX-512; two
     /// `packet8` calls on a CPU without it).
     Packet16,
-    /// `intersect_hybrid16` / `occluded_hybrid16`: 16-ray packets that hand their last few
-    /// lanes to single-ray traversal of the wide tree (two `hybrid8` calls without AVX-512).
+    /// `intersect_hybrid16` / `occluded_hybrid16`: 16-ray packets down the wide tree
+    /// together (any hit, and closest hit when the lanes share an octant), or down the binary
+    /// tree (closest hit, mixed octants), each lane alone once few remain (two `hybrid8`
+    /// calls without AVX-512).
     Hybrid16,
 }
 

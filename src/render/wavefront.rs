@@ -50,7 +50,8 @@ pub enum Kernel {
     /// `intersect16` / `occluded16`: two packets as one of 16 rays (AVX-512; else two
     /// packet calls).
     Packet16,
-    /// `intersect_hybrid16` / `occluded_hybrid16`: two packets as one hybrid packet of 16.
+    /// `intersect_hybrid16` / `occluded_hybrid16`: two packets as one hybrid packet of 16
+    /// (down the wide tree together when they share an octant, as binned queues mostly do).
     Hybrid16,
 }
 
