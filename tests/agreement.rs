@@ -515,6 +515,17 @@ fn wide1_batch_entries_fill_every_slot() {
     assert_eq!(occ, [true, false, true]);
 }
 
+/// Packet `h` (0 or 1) of a group of up to 16 rays, its lanes active where `mask` (bit `i`
+/// for ray `i` of the group) says so and a ray is there.
+fn half16(group: &[Ray], mask: u16, h: usize) -> (RayPacket8, simd::M32x8) {
+    let part = group.get(8 * h..).unwrap_or(&[]);
+    let (p, active) = RayPacket8::from_fn(|i| part.get(i).copied());
+    (
+        p,
+        active & simd::mask_from_bits((mask >> (8 * h)) as u32 & 0xFF),
+    )
+}
+
 /// `hybrid16`'s any hit takes 16 rays down the wide tree together, testing a leaf for the
 /// packet when more than `SWITCH_WIDE16` lanes meet it and lane by lane otherwise, and walks a
 /// node's subtree lane by lane once few lanes reach it. Coherent shadow rays (the bench's, on
@@ -549,15 +560,7 @@ fn hybrid16_wide_packets_equal_scalar_on_coherent_rays() {
         for cull in [false, true] {
             for mask in [0xFFFFu16, 0b1011_0111_1110_1101] {
                 for group in rays.chunks(16) {
-                    let half = |h: usize| {
-                        let part = group.get(8 * h..).unwrap_or(&[]);
-                        let (p, active) = RayPacket8::from_fn(|i| part.get(i).copied());
-                        (
-                            p,
-                            active & simd::mask_from_bits((mask >> (8 * h)) as u32 & 0xFF),
-                        )
-                    };
-                    let ((p0, a0), (p1, a1)) = (half(0), half(1));
+                    let ((p0, a0), (p1, a1)) = (half16(group, mask, 0), half16(group, mask, 1));
                     let got = occluded_hybrid16(&accel, [&p0, &p1], [a0, a1], cull);
                     for (i, ray) in group.iter().enumerate() {
                         let (h, lane) = (i / 8, i % 8);
@@ -594,15 +597,7 @@ fn hybrid16_wide_packets_equal_scalar_on_coherent_rays() {
         for cull in [false, true] {
             for mask in [0xFFFFu16, 0b1011_0111_1110_1101] {
                 for group in rays.chunks(16) {
-                    let half = |h: usize| {
-                        let part = group.get(8 * h..).unwrap_or(&[]);
-                        let (p, active) = RayPacket8::from_fn(|i| part.get(i).copied());
-                        (
-                            p,
-                            active & simd::mask_from_bits((mask >> (8 * h)) as u32 & 0xFF),
-                        )
-                    };
-                    let ((p0, a0), (p1, a1)) = (half(0), half(1));
+                    let ((p0, a0), (p1, a1)) = (half16(group, mask, 0), half16(group, mask, 1));
                     let got = intersect_hybrid16(&accel, [&p0, &p1], [a0, a1], cull);
                     for (i, ray) in group.iter().enumerate() {
                         let want = if mask >> i & 1 == 1 {
