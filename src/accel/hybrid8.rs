@@ -11,7 +11,7 @@
 
 use super::Accel;
 use super::packet::traverse8;
-use super::wide1::{Lanes, RayWide, STACK, stack_need, walk};
+use super::wide1::{Lanes, RayWide, STACK, grow_stack, walk};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8};
@@ -42,10 +42,7 @@ pub(super) fn hand_off<const ANY_HIT: bool>(
     let mut occ = 0u32;
     let mut b = simd::bitmask(here);
     STACK.with_borrow_mut(|st| {
-        let need = stack_need(bvh);
-        if st.len() < need {
-            st.resize(need, (0, 0.0));
-        }
+        grow_stack(st, bvh);
         while b != 0 {
             let i = b.trailing_zeros() as usize;
             b &= b - 1;

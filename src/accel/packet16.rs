@@ -19,7 +19,7 @@ use super::packet::{intersect8, occluded8};
 use super::scalar::{BARY_SAFE, Stack, inside_f64};
 use super::tri_soa::Leaf;
 use super::wide::NO_ENTRY;
-use super::wide1::{RayWide, STACK, stack_need, walk};
+use super::wide1::{RayWide, STACK, grow_stack, walk};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
@@ -447,6 +447,35 @@ macro_rules! hit_triangle16 {
     };
 }
 
+/// Record hits in the lanes of `take` (already the lanes whose hit is nearer, or as near with
+/// a lower triangle index): triangle `id`, `(t, b1, b2)`, and the new `limit`, the next
+/// float above `t` (as in `intersect1`). A macro over the walk's hit vectors, like
+/// `hit_triangle16`.
+macro_rules! take_hits16 {
+    ($take:expr, $id:expr, $t:expr, $b1:expr, $b2:expr, $limit:expr;
+     $tri:ident, $t_hit:ident, $b1_hit:ident, $b2_hit:ident, $tfar:ident) => {{
+        let (take, t) = ($take, $t);
+        $tri = _mm512_mask_mov_epi32($tri, take, $id);
+        $t_hit = _mm512_mask_mov_ps($t_hit, take, t);
+        $b1_hit = _mm512_mask_mov_ps($b1_hit, take, $b1);
+        $b2_hit = _mm512_mask_mov_ps($b2_hit, take, $b2);
+        $tfar = _mm512_mask_mov_ps($tfar, take, $limit);
+    }};
+}
+
+/// Record lane `i`'s hit `h` from a single-ray walk, found below the lane's limit: so nearer,
+/// or as near with a lower index (as `hybrid8::HitLanes::take`).
+macro_rules! take_lane16 {
+    ($i:expr, $h:expr; $tri:ident, $t_hit:ident, $b1_hit:ident, $b2_hit:ident, $tfar:ident) => {{
+        let (i, h): (usize, Hit) = ($i, $h);
+        let (old_tri, old_t) = (bytemuck::cast::<_, [u32; 16]>($tri)[i], lanes16($t_hit)[i]);
+        if old_tri == Hit::NONE_ID || h.t < old_t || h.tri < old_tri {
+            take_hits16!(1u16 << i, _mm512_set1_epi32(h.tri as i32), splat(h.t), splat(h.b1),
+                splat(h.b2), splat(h.t.next_up()); $tri, $t_hit, $b1_hit, $b2_hit, $tfar);
+        }
+    }};
+}
+
 /// `traverse8` in 16 lanes: closest hits, and with `ANY_HIT` the occluded lanes. With
 /// `SWITCH > 0` (`hybrid16`) a node reached by at most `SWITCH` lanes that has a twin in the
 /// wide tree is walked by each of those lanes alone (`wide1::walk`).
@@ -501,12 +530,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                     let id = _mm512_set1_epi32(accel.tris.prim[leaf.slot(j)] as i32);
                     let better = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, t_hit)
                         | _mm512_cmplt_epu32_mask(id, tri);
-                    let take = mask & better;
-                    tri = _mm512_mask_mov_epi32(tri, take, id);
-                    t_hit = _mm512_mask_mov_ps(t_hit, take, t);
-                    b1_hit = _mm512_mask_mov_ps(b1_hit, take, b1);
-                    b2_hit = _mm512_mask_mov_ps(b2_hit, take, b2);
-                    tfar = _mm512_mask_mov_ps(tfar, take, next_up(t));
+                    take_hits16!(mask & better, id, t, b1, b2, next_up(t); tri, t_hit, b1_hit, b2_hit, tfar);
                 }
             }};
         }
@@ -522,10 +546,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
             let tf = lanes16(tfar);
             let mut bits = here;
             STACK.with_borrow_mut(|st| {
-                let need = stack_need(&accel.wide);
-                if st.len() < need {
-                    st.resize(need, (0, 0.0));
-                }
+                grow_stack(st, &accel.wide);
                 while bits != 0 {
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
@@ -541,17 +562,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                         active &= !lane;
                         continue;
                     }
-                    // record hit: found below the lane's limit, so nearer, or as near with a
-                    // lower index (as `hybrid8::HitLanes::take`)
-                    let (old_tri, old_t) =
-                        (bytemuck::cast::<_, [u32; 16]>(tri)[i], lanes16(t_hit)[i]);
-                    if old_tri == Hit::NONE_ID || h.t < old_t || h.tri < old_tri {
-                        tri = _mm512_mask_set1_epi32(tri, lane, h.tri as i32);
-                        t_hit = _mm512_mask_mov_ps(t_hit, lane, splat(h.t));
-                        b1_hit = _mm512_mask_mov_ps(b1_hit, lane, splat(h.b1));
-                        b2_hit = _mm512_mask_mov_ps(b2_hit, lane, splat(h.b2));
-                        tfar = _mm512_mask_mov_ps(tfar, lane, splat(h.t.next_up()));
-                    }
+                    take_lane16!(i, h; tri, t_hit, b1_hit, b2_hit, tfar);
                 }
             });
             if ANY_HIT && active == 0 {
@@ -717,23 +728,15 @@ fn traverse_wide16_any(
     // (the thread's stack borrowed here rather than through `wide1::with_stack`, whose
     // closure, compiled without AVX-512, would call this one out of line)
     STACK.with_borrow_mut(|st| {
-        let need = stack_need(bvh);
-        if st.len() < need {
-            st.resize(need, (0, 0.0));
-        }
+        grow_stack(st, bvh);
         loop {
-            macro_rules! walker {
-                ($i:expr) => {
-                    walkers[$i].get_or_insert_with(|| r.walker($i))
-                };
-            }
             if here.count_ones() <= SWITCH_WIDE16 {
                 // few lanes: each walks this subtree alone.
                 let mut bits = here;
                 while bits != 0 {
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    let rw = walker!(i);
+                    let rw = walkers[i].get_or_insert_with(|| r.walker(i));
                     if walk::<true>(accel, bvh, cur, rw, tf[i], cull, st).is_some() {
                         occluded |= 1 << i;
                         active &= !(1 << i);
@@ -768,7 +771,7 @@ fn traverse_wide16_any(
                         while bits != 0 {
                             let i = bits.trailing_zeros() as usize;
                             bits &= bits - 1;
-                            let rw = walker!(i);
+                            let rw = walkers[i].get_or_insert_with(|| r.walker(i));
                             for block in first..first + count {
                                 if super::wide1::hit_block1::<true>(accel, block, rw, tf[i], cull)
                                     .is_some()
@@ -865,32 +868,8 @@ fn traverse_wide16_closest(
     // (the thread's stack borrowed here rather than through `wide1::with_stack`, whose
     // closure, compiled without AVX-512, would call this one out of line)
     STACK.with_borrow_mut(|st| {
-        let need = stack_need(bvh);
-        if st.len() < need {
-            st.resize(need, (0, 0.0));
-        }
+        grow_stack(st, bvh);
         loop {
-            macro_rules! walker {
-                ($i:expr) => {
-                    walkers[$i].get_or_insert_with(|| r.walker($i))
-                };
-            }
-            // record a lane's hit found below its limit (as the hand-off of `traverse16`)
-            macro_rules! record {
-                ($i:expr, $h:expr) => {{
-                    let (i, h): (usize, Hit) = ($i, $h);
-                    let lane = 1u16 << i;
-                    let (old_tri, old_t) =
-                        (bytemuck::cast::<_, [u32; 16]>(tri)[i], lanes16(t_hit)[i]);
-                    if old_tri == Hit::NONE_ID || h.t < old_t || h.tri < old_tri {
-                        tri = _mm512_mask_set1_epi32(tri, lane, h.tri as i32);
-                        t_hit = _mm512_mask_mov_ps(t_hit, lane, splat(h.t));
-                        b1_hit = _mm512_mask_mov_ps(b1_hit, lane, splat(h.b1));
-                        b2_hit = _mm512_mask_mov_ps(b2_hit, lane, splat(h.b2));
-                        tfar = _mm512_mask_mov_ps(tfar, lane, splat(h.t.next_up()));
-                    }
-                }};
-            }
             if here.count_ones() <= SWITCH_WIDE16 {
                 // few lanes: each walks this subtree alone.
                 let tf = lanes16(tfar);
@@ -898,9 +877,9 @@ fn traverse_wide16_closest(
                 while bits != 0 {
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    let rw = walker!(i);
+                    let rw = walkers[i].get_or_insert_with(|| r.walker(i));
                     if let Some(h) = walk::<false>(accel, bvh, cur, rw, tf[i], cull, st) {
-                        record!(i, h);
+                        take_lane16!(i, h; tri, t_hit, b1_hit, b2_hit, tfar);
                     }
                 }
             } else {
@@ -934,13 +913,13 @@ fn traverse_wide16_closest(
                         while bits != 0 {
                             let i = bits.trailing_zeros() as usize;
                             bits &= bits - 1;
-                            let rw = walker!(i);
+                            let rw = walkers[i].get_or_insert_with(|| r.walker(i));
                             let mut limit = tf[i];
                             for block in first..first + count {
                                 if let Some(h) =
                                     super::wide1::hit_block1::<false>(accel, block, rw, limit, cull)
                                 {
-                                    record!(i, h);
+                                    take_lane16!(i, h; tri, t_hit, b1_hit, b2_hit, tfar);
                                     limit = h.t.next_up();
                                 }
                             }
@@ -959,12 +938,8 @@ fn traverse_wide16_closest(
                                 let id = _mm512_set1_epi32(blk.prim[j] as i32);
                                 let better = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, t_hit)
                                     | _mm512_cmplt_epu32_mask(id, tri);
-                                let take = mask & better;
-                                tri = _mm512_mask_mov_epi32(tri, take, id);
-                                t_hit = _mm512_mask_mov_ps(t_hit, take, t);
-                                b1_hit = _mm512_mask_mov_ps(b1_hit, take, b1);
-                                b2_hit = _mm512_mask_mov_ps(b2_hit, take, b2);
-                                tfar = _mm512_mask_mov_ps(tfar, take, next_up(t));
+                                take_hits16!(mask & better, id, t, b1, b2, next_up(t);
+                                    tri, t_hit, b1_hit, b2_hit, tfar);
                             }
                         }
                     }

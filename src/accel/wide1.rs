@@ -197,8 +197,18 @@ pub struct NodeHits {
 /// Traversal stack entries a walk of `bvh` needs: each node level leaves at most 7 entries
 /// behind, and a node writes at most 8 slots at once (the closest-hit walk's octant pass
 /// writes all of them).
-pub(super) fn stack_need(bvh: &Bvh8) -> usize {
+fn stack_need(bvh: &Bvh8) -> usize {
     bvh.depth * 7 + 8
+}
+
+/// Grow the thread's traversal `stack` to what a walk of `bvh` needs ([`stack_need`]), for
+/// every user of [`STACK`].
+#[inline(always)]
+pub(super) fn grow_stack(stack: &mut Vec<(u32, f32)>, bvh: &Bvh8) {
+    let need = stack_need(bvh);
+    if stack.len() < need {
+        stack.resize(need, (0, 0.0));
+    }
 }
 
 thread_local! {
@@ -225,10 +235,7 @@ fn with_stack<R>(bvh: &Bvh8, f: impl FnOnce(&Bvh8, &mut [(u32, f32)]) -> R) -> O
         return None;
     }
     Some(STACK.with_borrow_mut(|stack| {
-        let need = stack_need(bvh);
-        if stack.len() < need {
-            stack.resize(need, (0, 0.0));
-        }
+        grow_stack(stack, bvh);
         f(bvh, stack)
     }))
 }
