@@ -151,6 +151,15 @@ fn small_mesh_workloads() {
     for (a, b) in m.iter().zip(&m2) {
         assert_eq!(a.results, b.results, "threads do not change results");
     }
+    // rounds (as `whitted bench` alternates them with the peer's) gather their passes
+    let mut rounds = bench::Measuring::default();
+    rounds.round(&accel, &work, 1, 1);
+    rounds.round(&accel, &work, 1, 2);
+    for (a, b) in m.iter().zip(rounds.finish()) {
+        assert_eq!((a.workload, a.engine), (b.workload, b.engine));
+        assert_eq!(a.results, b.results, "rounds do not change results");
+        assert!(b.timing.wall_best <= b.timing.wall_median);
+    }
 }
 
 /// The kitten at the peer's full size: mesh (sub 0 and 1) and primary set hash to the values
@@ -289,6 +298,115 @@ fn parses_rt_bench_output() {
     // not rt-bench output
     assert!(bench::parse_peer("usage: rt-bench MESH ...\n").is_err());
     assert!(bench::parse_peer("  primary rtcIntersect1  12 rays  wall best x med\n").is_err());
+}
+
+/// The peer's one-pass runs merge into best and median per kernel and for the build (the
+/// median as the peer takes it, `sorted[n / 2]` of the times); runs over different ray sets
+/// are refused.
+#[test]
+fn peer_runs_merge_into_best_and_median() {
+    let one = bench::parse_peer(SAMPLE).unwrap();
+    // three runs whose shadow x16 rates are 7, 9, 8 and builds 9, 8, 10 ms
+    let runs: Vec<_> = [(7.0, 9.0), (9.0, 8.0), (8.0, 10.0)]
+        .into_iter()
+        .map(|(rate, build)| {
+            let mut r = one.clone();
+            let k = r
+                .kernels
+                .iter_mut()
+                .find(|k| k.workload == Workload::Shadow && k.width == 16)
+                .unwrap();
+            (k.wall_best, k.cpu_best) = (rate, rate + 0.5);
+            (k.wall_median, k.cpu_median) = (rate, rate + 0.5);
+            (r.build_best_ms, r.build_median_ms) = (Some(build), Some(build));
+            r
+        })
+        .collect();
+    let m = bench::merge_peer(&runs).unwrap();
+    let k = m.kernel(Workload::Shadow, 16).unwrap();
+    assert_eq!(
+        (k.wall_best, k.wall_median, k.cpu_best, k.cpu_median),
+        (9.0, 8.0, 9.5, 8.5)
+    );
+    assert_eq!((m.build_best_ms, m.build_median_ms), (Some(8.0), Some(9.0)));
+    // the other kernels' runs are alike: each run's one pass is its best
+    let k = m.kernel(Workload::Primary, 8).unwrap();
+    assert_eq!(
+        (k.rays, k.wall_best, k.wall_median, k.cpu_best, k.cpu_median),
+        (2073600, 23.22, 23.22, 23.22, 23.22)
+    );
+    // one run merges to itself but for the medians, which become its best passes
+    let alone = bench::merge_peer(std::slice::from_ref(&one)).unwrap();
+    assert_eq!(
+        alone.kernel(Workload::Incoherent, 1).unwrap().cpu_median,
+        4.72
+    );
+    // different ray sets
+    let mut other = one.clone();
+    other.occluded = Some(1);
+    assert!(bench::merge_peer(&[one.clone(), other]).is_err());
+    assert!(bench::merge_peer(&[]).is_err());
+}
+
+/// `whitted bench` alternates with the peer: one peer run per round, each of one pass
+/// (`--reps 1`), and the report merges them. A stand-in for rt-bench logs its calls and
+/// prints the captured output.
+#[cfg(unix)]
+#[test]
+fn bench_alternates_rounds_with_the_peer() {
+    use std::os::unix::fs::PermissionsExt;
+    use whitted::bench::{Options, bench_mesh};
+    let dir = std::env::temp_dir().join(format!("whitted-fake-peer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (peer, log, out) = (dir.join("rt-bench"), dir.join("calls"), dir.join("out.txt"));
+    std::fs::write(&out, SAMPLE).unwrap();
+    std::fs::write(
+        &peer,
+        format!(
+            "#!/bin/sh\necho \"$*\" >> '{}'\ncat '{}'\n",
+            log.display(),
+            out.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&peer, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let cube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let opts = Options {
+        width: 32,
+        height: 18,
+        reps: 3,
+        peer: Some(peer.clone()),
+        ..Options::default()
+    };
+    let r = bench_mesh(&cube, &opts).unwrap();
+    let calls = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(calls.lines().count(), 3, "{calls}");
+    assert!(calls.lines().all(|c| c.contains("--reps 1")), "{calls}");
+    let p = r.peer.as_ref().unwrap();
+    assert_eq!(p.build_best_ms, Some(8.35));
+    let text = bench::format_report(&r);
+    assert!(text.contains("rounds 3"), "{text}");
+    assert!(
+        text.contains("of 3 rounds, one pass each, alternating with the peer's"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Samples taken in several rounds add up (each round after its own warm-up call), and their
+/// best is no more than their median.
+#[test]
+fn samples_gather_over_rounds() {
+    let mut s = bench::Samples::default();
+    let mut calls = 0;
+    s.take(2, 1, || {}, || calls += 1);
+    s.take(3, 1, || {}, || calls += 1);
+    assert_eq!((s.len(), calls), (5, 7));
+    let t = s.timing();
+    assert!(t.wall_best <= t.wall_median);
+    if cfg!(target_os = "linux") {
+        assert!(t.cpu_best.unwrap() <= t.cpu_median.unwrap());
+    }
 }
 
 #[test]

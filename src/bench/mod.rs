@@ -54,7 +54,9 @@ pub struct Options {
     /// Image height of the camera workloads (also the peer's `--height`).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = HEIGHT))]
     pub height: u32,
-    /// Timed passes per workload after one warm-up (best and median are reported).
+    /// Rounds (best and median are taken over them). Each round times one build and one pass
+    /// of every engine on every workload, then runs the peer for one build and one pass of
+    /// each of its kernels; every timed call, on both sides, follows an untimed warm-up.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 5))]
     pub reps: usize,
     /// Print one JSON object instead of tables.
@@ -120,20 +122,48 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
                 ))
             })?,
     };
-    let (accel, build, collapse) = time_build(&tris, reps, quality, threads);
-    let work = Workloads::generate(&mesh, &accel, width, height);
-    let measured = measure(&accel, &work, threads, reps);
-    let peak_resident = peak_resident_bytes();
-    let peer = if opts.no_peer {
+    let peer_path = if opts.no_peer {
         Err("not run (--no-peer)".to_string())
     } else {
-        match find_peer(opts.peer.as_deref()) {
-            None => Err("rt-bench not found (PATH, --peer or WHITTED_PEER)".to_string()),
-            Some(p) => {
-                run_peer(&p, path, threads, opts.subdivide, reps, (width, height)).map(|r| r.0)
+        find_peer(opts.peer.as_deref())
+            .ok_or_else(|| "rt-bench not found (PATH, --peer or WHITTED_PEER)".to_string())
+    };
+    // Rounds: whitted's build and every engine's pass over every workload, then the peer's
+    // run, one timed call each after a warm-up on both sides, `reps` times over. A noisy
+    // stretch on a shared machine then falls on both sides' passes alike (timed one side
+    // after the other, a burst during whitted's half moved the 1.3M shadow ratio from 1.05
+    // to 0.90 between two runs while Embree's figure stayed within 0.5%).
+    let mut build = Samples::default();
+    let mut collapse = std::time::Duration::MAX;
+    let mut measuring = Measuring::default();
+    let mut work: Option<Workloads> = None;
+    let mut accel = crate::accel::Accel::default();
+    let mut peer_runs = peer_path.as_ref().map(|_| vec![]).map_err(Clone::clone);
+    let mut peak_resident = None;
+    for round in 0..reps {
+        // (the previous round's tree freed first, as in each timed build)
+        drop(std::mem::take(&mut accel));
+        let (a, c) = sample_build(&tris, 1, quality, threads, &mut build);
+        accel = a;
+        collapse = collapse.min(c);
+        let work = work.get_or_insert_with(|| Workloads::generate(&mesh, &accel, width, height));
+        measuring.round(&accel, work, threads, 1);
+        if round == 0 {
+            // (the first round's: later rounds allocate the same again, and what the
+            // allocator keeps of earlier rounds is not this mesh's footprint)
+            peak_resident = peak_resident_bytes();
+        }
+        if let (Ok(p), Ok(runs)) = (&peer_path, &mut peer_runs) {
+            match run_peer(p, path, threads, opts.subdivide, 1, (width, height)) {
+                Ok((r, _)) => runs.push(r),
+                Err(e) => peer_runs = Err(e),
             }
         }
-    };
+    }
+    let work = work.expect("at least one round");
+    let measured = measuring.finish();
+    let peer = peer_runs.and_then(|runs| merge_peer(&runs));
+    let build = build.timing();
     Ok(Report {
         mesh: path.to_path_buf(),
         subdivide: opts.subdivide,

@@ -175,3 +175,55 @@ pub fn run_peer(
     }
     parse_peer(&text).map(|p| (p, text))
 }
+
+/// One report from the peer's runs of one pass each (`--reps 1`, one per round of `whitted
+/// bench`): per kernel and for the build, the best and the median over the runs, as the
+/// peer computes them over its passes (`median = sorted[runs / 2]` of the times, so the
+/// rate of that pass); the rest from the first run. Runs that traced different ray sets
+/// (counts or hits differ) are refused.
+pub fn merge_peer(runs: &[PeerReport]) -> Result<PeerReport, String> {
+    let first = runs.first().ok_or("no peer runs")?;
+    for r in &runs[1..] {
+        let key = |p: &PeerReport| {
+            let kernels: Vec<_> = p
+                .kernels
+                .iter()
+                .map(|k| (k.workload, k.width, k.rays))
+                .collect();
+            (
+                p.triangles,
+                p.primary_hits,
+                p.occluded,
+                p.incoherent_hits,
+                kernels,
+            )
+        };
+        if key(r) != key(first) {
+            return Err("the peer's runs traced different ray sets".into());
+        }
+    }
+    // best (highest rate) and median (the median pass's rate) of one figure per run.
+    let best_median = |rates: Vec<f64>| {
+        let mut v = rates;
+        // descending rates = ascending times
+        v.sort_by(|a, b| b.total_cmp(a));
+        (v[0], v[v.len() / 2])
+    };
+    let mut merged = first.clone();
+    for (i, k) in merged.kernels.iter_mut().enumerate() {
+        (k.wall_best, k.wall_median) =
+            best_median(runs.iter().map(|r| r.kernels[i].wall_best).collect());
+        (k.cpu_best, k.cpu_median) =
+            best_median(runs.iter().map(|r| r.kernels[i].cpu_best).collect());
+    }
+    let builds: Option<Vec<f64>> = runs.iter().map(|r| r.build_best_ms).collect();
+    (merged.build_best_ms, merged.build_median_ms) = match builds {
+        Some(mut b) => {
+            b.sort_by(f64::total_cmp);
+            (Some(b[0]), Some(b[b.len() / 2]))
+        }
+        None => (None, None),
+    };
+    merged.mismatches = runs.iter().filter_map(|r| r.mismatches).max();
+    Ok(merged)
+}

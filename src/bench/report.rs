@@ -16,7 +16,8 @@ pub struct Report {
     pub triangles: usize,
     /// Tracing threads (at least 1).
     pub threads: usize,
-    /// Timed passes per workload (1..=64).
+    /// Rounds (1..=64): one timed build and one timed pass per engine and workload each,
+    /// alternating with the peer's runs.
     pub reps: usize,
     /// The camera and light the workloads were generated from.
     pub framing: Framing,
@@ -130,7 +131,7 @@ pub fn format_report(r: &Report) -> String {
     let fr = &r.framing;
     let _ = writeln!(
         s,
-        "whitted bench {} subdivide {}: {} vertices, {} triangles | threads {}, reps {} | {} | {}",
+        "whitted bench {} subdivide {}: {} vertices, {} triangles | threads {}, rounds {} | {} | {}",
         r.mesh.display(),
         r.subdivide,
         r.vertices,
@@ -193,9 +194,14 @@ pub fn format_report(r: &Report) -> String {
     for cpu in [false, true] {
         let _ = writeln!(
             s,
-            "\n{} Mrays/s, best (median) of {} passes{}:",
+            "\n{} Mrays/s, best (median) of {} rounds, one pass each{}{}:",
             if cpu { "CPU-time" } else { "Wall-clock" },
             r.reps,
+            if r.peer.is_ok() {
+                ", alternating with the peer's"
+            } else {
+                ""
+            },
             if cpu {
                 " (rays per CPU-second of the tracing threads; steadier on a busy machine)"
             } else {
@@ -381,6 +387,7 @@ pub fn report_json(r: &Report) -> serde_json::Value {
         "triangles": r.triangles,
         "threads": r.threads,
         "reps": r.reps,
+        "rounds": r.reps,
         "avx2": cfg!(target_feature = "avx2"),
         "avx512": crate::accel::packet16::available(),
         "camera": {"canonical": fr.canonical, "eye": fr.eye, "look_at": fr.look, "light": fr.light,

@@ -20,9 +20,10 @@ pub struct Timing {
 }
 
 impl Timing {
-    fn of(mut wall: Vec<f64>, cpu: Vec<Option<f64>>) -> Timing {
+    fn of(samples: &Samples) -> Timing {
+        let mut wall = samples.wall.clone();
         wall.sort_by(f64::total_cmp);
-        let mut cpu: Option<Vec<f64>> = cpu.into_iter().collect();
+        let mut cpu: Option<Vec<f64>> = samples.cpu.iter().copied().collect();
         if let Some(c) = &mut cpu {
             c.sort_by(f64::total_cmp);
         }
@@ -56,6 +57,53 @@ pub fn cpu_seconds(all: bool) -> Option<f64> {
     Some(t.as_secs_f64())
 }
 
+/// The timed calls of one measurement, possibly gathered over several rounds: wall-clock
+/// and CPU seconds per call.
+#[derive(Clone, Debug, Default)]
+pub struct Samples {
+    wall: Vec<f64>,
+    cpu: Vec<Option<f64>>,
+}
+
+impl Samples {
+    /// Best and median of the calls so far (at least one).
+    pub fn timing(&self) -> Timing {
+        Timing::of(self)
+    }
+
+    /// Timed calls so far.
+    pub fn len(&self) -> usize {
+        self.wall.len()
+    }
+
+    /// Whether no call was timed yet.
+    pub fn is_empty(&self) -> bool {
+        self.wall.is_empty()
+    }
+
+    /// One untimed warm-up call of `f`, then `reps` timed calls (at least one), each after an
+    /// untimed call of `before`; CPU time of this thread (`threads <= 1`) or the process.
+    pub fn take(
+        &mut self,
+        reps: usize,
+        threads: usize,
+        mut before: impl FnMut(),
+        mut f: impl FnMut(),
+    ) {
+        before();
+        f();
+        for _ in 0..reps.max(1) {
+            before();
+            let c0 = cpu_seconds(threads > 1);
+            let t0 = Instant::now();
+            f();
+            self.wall.push(t0.elapsed().as_secs_f64());
+            let c1 = cpu_seconds(threads > 1);
+            self.cpu.push(c0.zip(c1).map(|(a, b)| b - a));
+        }
+    }
+}
+
 /// Time `f` after one untimed warm-up call: `reps` timed calls.
 pub fn time_reps(reps: usize, threads: usize, f: impl FnMut()) -> Timing {
     time_reps_after(reps, threads, || {}, f)
@@ -65,22 +113,12 @@ pub fn time_reps(reps: usize, threads: usize, f: impl FnMut()) -> Timing {
 pub fn time_reps_after(
     reps: usize,
     threads: usize,
-    mut before: impl FnMut(),
-    mut f: impl FnMut(),
+    before: impl FnMut(),
+    f: impl FnMut(),
 ) -> Timing {
-    before();
-    f();
-    let (mut wall, mut cpu) = (vec![], vec![]);
-    for _ in 0..reps.max(1) {
-        before();
-        let c0 = cpu_seconds(threads > 1);
-        let t0 = Instant::now();
-        f();
-        wall.push(t0.elapsed().as_secs_f64());
-        let c1 = cpu_seconds(threads > 1);
-        cpu.push(c0.zip(c1).map(|(a, b)| b - a));
-    }
-    Timing::of(wall, cpu)
+    let mut s = Samples::default();
+    s.take(reps, threads, before, f);
+    s.timing()
 }
 
 /// One engine on one set.
@@ -98,33 +136,74 @@ pub struct Measured {
     pub results: Results,
 }
 
-/// Time both engines on every workload (`reps` passes after a warm-up each), on the calling
-/// thread (`threads <= 1`) or on a pool of `threads`.
+/// Time every engine on every workload (`reps` passes after a warm-up each), on the calling
+/// thread (`threads <= 1`) or on a pool of `threads`: one [`Measuring::round`].
 pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> Vec<Measured> {
-    let pool = (threads > 1).then(|| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("thread pool")
-    });
-    let mut all = vec![];
-    for (workload, rays) in work.sets() {
-        let packets = Packets::new(rays);
-        for engine in Engine::ALL {
-            let mut out = Out::new(engine, workload.any_hit(), rays);
-            let timing = time_reps(reps, threads, || {
-                pass(accel, rays, &packets, &mut out, pool.as_ref())
-            });
-            all.push(Measured {
-                workload,
-                engine,
-                rays: rays.len(),
-                timing,
-                results: results_of(&out, rays.len()),
-            });
+    let mut m = Measuring::default();
+    m.round(accel, work, threads, reps);
+    m.finish()
+}
+
+/// Every engine on every workload, timed in rounds (`whitted bench` alternates them with the
+/// peer's): each round adds its passes to the samples of the rounds before.
+#[derive(Default)]
+pub struct Measuring {
+    /// Per workload and engine, in [`measure`]'s order: its samples and last results.
+    sets: Vec<(Workload, Engine, usize, Samples, Results)>,
+}
+
+impl Measuring {
+    /// One round: each engine on each workload, a warm-up pass then `passes` timed ones. The
+    /// workloads must be the same from round to round (`accel` may be rebuilt in between).
+    pub fn round(&mut self, accel: &Accel, work: &Workloads, threads: usize, passes: usize) {
+        let pool = (threads > 1).then(|| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool")
+        });
+        let first = self.sets.is_empty();
+        let mut i = 0;
+        for (workload, rays) in work.sets() {
+            let packets = Packets::new(rays);
+            for engine in Engine::ALL {
+                let mut out = Out::new(engine, workload.any_hit(), rays);
+                let mut samples = Samples::default();
+                samples.take(
+                    passes,
+                    threads,
+                    || {},
+                    || pass(accel, rays, &packets, &mut out, pool.as_ref()),
+                );
+                let results = results_of(&out, rays.len());
+                if first {
+                    self.sets
+                        .push((workload, engine, rays.len(), samples, results));
+                } else {
+                    let set = &mut self.sets[i];
+                    assert_eq!((set.0, set.1), (workload, engine), "the same workloads");
+                    set.3.wall.extend(samples.wall);
+                    set.3.cpu.extend(samples.cpu);
+                    set.4 = results;
+                }
+                i += 1;
+            }
         }
     }
-    all
+
+    /// Best and median over every round so far, with the last round's results.
+    pub fn finish(self) -> Vec<Measured> {
+        self.sets
+            .into_iter()
+            .map(|(workload, engine, rays, samples, results)| Measured {
+                workload,
+                engine,
+                rays,
+                timing: samples.timing(),
+                results,
+            })
+            .collect()
+    }
 }
 
 /// BVH build time over `tris` with `quality`, best and median of `reps` builds after a
@@ -140,6 +219,20 @@ pub fn time_build(
     quality: BuildQuality,
     threads: usize,
 ) -> (Accel, Timing, std::time::Duration) {
+    let mut samples = Samples::default();
+    let (accel, collapse) = sample_build(tris, reps, quality, threads, &mut samples);
+    (accel, samples.timing(), collapse)
+}
+
+/// [`time_build`]'s builds, their times added to `samples`: the last build and the shortest
+/// collapse of the timed ones.
+pub fn sample_build(
+    tris: &[[Vec3; 3]],
+    reps: usize,
+    quality: BuildQuality,
+    threads: usize,
+    samples: &mut Samples,
+) -> (Accel, std::time::Duration) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
@@ -147,7 +240,7 @@ pub fn time_build(
     pool.install(|| {
         let accel = std::cell::RefCell::new(Accel::default());
         let collapse = std::cell::Cell::new(std::time::Duration::MAX);
-        let t = time_reps_after(
+        samples.take(
             reps,
             threads,
             || drop(accel.take()),
@@ -157,7 +250,7 @@ pub fn time_build(
                 *accel.borrow_mut() = a;
             },
         );
-        (accel.into_inner(), t, collapse.get())
+        (accel.into_inner(), collapse.get())
     })
 }
 
