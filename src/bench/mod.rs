@@ -141,7 +141,9 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     let mut peer_runs = peer_path.as_ref().map(|_| vec![]).map_err(Clone::clone);
     let mut peak_resident = None;
     for round in 0..reps {
-        // (the previous round's tree freed first, as in each timed build)
+        // (the previous round's tree and results freed first, as in each timed build; the
+        // results are recorded again by this round's passes)
+        measuring.forget_results();
         drop(std::mem::take(&mut accel));
         let (a, c) = sample_build(&tris, 1, quality, threads, &mut build);
         accel = a;
@@ -149,8 +151,8 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
         let work = work.get_or_insert_with(|| Workloads::generate(&mesh, &accel, width, height));
         measuring.round(&accel, work, threads, 1);
         if round == 0 {
-            // (the first round's: later rounds allocate the same again, and what the
-            // allocator keeps of earlier rounds is not this mesh's footprint)
+            // (the first round's: a later round's build also runs beside the workloads,
+            // which a single build-then-trace does not have)
             peak_resident = peak_resident_bytes();
         }
         if let (Ok(p), Ok(runs)) = (&peer_path, &mut peer_runs) {

@@ -148,8 +148,9 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
 /// peer's): each round adds its passes to the samples of the rounds before.
 #[derive(Default)]
 pub struct Measuring {
-    /// Per workload and engine, in [`measure`]'s order: its samples and last results.
-    sets: Vec<(Workload, Engine, usize, Samples, Results)>,
+    /// Per workload and engine, in [`measure`]'s order: its samples and the last round's
+    /// results (`None` after [`Measuring::forget_results`]).
+    sets: Vec<(Workload, Engine, usize, Samples, Option<Results>)>,
 }
 
 impl Measuring {
@@ -178,20 +179,30 @@ impl Measuring {
                 let results = results_of(&out, rays.len());
                 if first {
                     self.sets
-                        .push((workload, engine, rays.len(), samples, results));
+                        .push((workload, engine, rays.len(), samples, Some(results)));
                 } else {
                     let set = &mut self.sets[i];
                     assert_eq!((set.0, set.1), (workload, engine), "the same workloads");
                     set.3.wall.extend(samples.wall);
                     set.3.cpu.extend(samples.cpu);
-                    set.4 = results;
+                    set.4 = Some(results);
                 }
                 i += 1;
             }
         }
     }
 
-    /// Best and median over every round so far, with the last round's results.
+    /// Drop the results kept so far (the next round records them again), so that what
+    /// runs between rounds, such as the next build, does not hold them: at 1.3M triangles
+    /// they are about 120 MB, most of it the camera rays' hits for each engine.
+    pub fn forget_results(&mut self) {
+        for set in &mut self.sets {
+            set.4 = None;
+        }
+    }
+
+    /// Best and median over every round so far, with the last round's results (empty if
+    /// they were forgotten since).
     pub fn finish(self) -> Vec<Measured> {
         self.sets
             .into_iter()
@@ -200,7 +211,7 @@ impl Measuring {
                 engine,
                 rays,
                 timing: samples.timing(),
-                results,
+                results: results.unwrap_or_default(),
             })
             .collect()
     }
