@@ -200,19 +200,20 @@ impl Bvh8 {
         let me = self.nodes.len();
         self.nodes.push(Node8::default());
         self.entry[b] = me as u32;
-        let mut kids = [(0usize, 0f32); BLOCK];
+        // the children (binary node, whether a leaf) the programme chose
+        let mut kids = [(0usize, false); BLOCK];
         let mut len = 0;
         let first = src.nodes[b].first as usize;
         let k = src.dp.split[b] as usize;
         for (c, slots) in [(first, k), (first + 1, BLOCK - k)] {
             src.dp.expand(src.nodes, c, slots, &mut |c| {
-                kids[len] = (c, if src.is_leaf(c) { -1.0 } else { 1.0 });
+                kids[len] = (c, src.is_leaf(c));
                 len += 1;
             });
         }
         let mut deepest = depth;
-        for (slot, &(k, w)) in kids[..len].iter().enumerate() {
-            let r = if w < 0.0 {
+        for (slot, &(k, leaf)) in kids[..len].iter().enumerate() {
+            let r = if leaf {
                 self.leaf(src, k)
             } else {
                 let r = self.nodes.len() as u32;
