@@ -200,20 +200,20 @@ impl Bvh8 {
         let me = self.nodes.len();
         self.nodes.push(Node8::default());
         self.entry[b] = me as u32;
-        // the children (binary node, whether a leaf) the programme chose
-        let mut kids = [(0usize, false); BLOCK];
+        // the binary nodes the programme chose as children
+        let mut kids = [0usize; BLOCK];
         let mut len = 0;
         let first = src.nodes[b].first as usize;
         let k = src.dp.split[b] as usize;
         for (c, slots) in [(first, k), (first + 1, BLOCK - k)] {
             src.dp.expand(src.nodes, c, slots, &mut |c| {
-                kids[len] = (c, src.is_leaf(c));
+                kids[len] = c;
                 len += 1;
             });
         }
         let mut deepest = depth;
-        for (slot, &(k, leaf)) in kids[..len].iter().enumerate() {
-            let r = if leaf {
+        for (slot, &k) in kids[..len].iter().enumerate() {
+            let r = if src.is_leaf(k) {
                 self.leaf(src, k)
             } else {
                 let r = self.nodes.len() as u32;
@@ -392,7 +392,7 @@ impl Dp {
         while let Some((b, children_done)) = stack.pop() {
             let node = &nodes[b];
             let f = node.first as usize;
-            if node.count > 0 || counts[b] as usize <= BLOCK {
+            if becomes_leaf(node, counts[b]) {
                 // a leaf whatever the choice above it: its blocks' cost is the same in every
                 // tree, so it is left out (cost 0).
                 continue;
@@ -445,10 +445,16 @@ impl Dp {
     }
 }
 
+/// Whether a binary node with `count` triangles below it becomes one wide leaf (a binary
+/// leaf, or at most a block).
+fn becomes_leaf(node: &Node, count: u32) -> bool {
+    node.count > 0 || count as usize <= BLOCK
+}
+
 impl Src<'_> {
-    /// Whether binary node `b` becomes one wide leaf (a binary leaf, or at most a block).
+    /// Whether binary node `b` becomes one wide leaf ([`becomes_leaf`]).
     fn is_leaf(&self, b: usize) -> bool {
-        self.nodes[b].count > 0 || self.counts[b] as usize <= BLOCK
+        becomes_leaf(&self.nodes[b], self.counts[b])
     }
 }
 

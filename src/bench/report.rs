@@ -194,9 +194,10 @@ pub fn format_report(r: &Report) -> String {
     for cpu in [false, true] {
         let _ = writeln!(
             s,
-            "\n{} Mrays/s, best (median) of {} rounds, one pass each{}{}:",
+            "\n{} Mrays/s, best (median) of {} round{}, one pass each{}{}:",
             if cpu { "CPU-time" } else { "Wall-clock" },
             r.reps,
+            if r.reps == 1 { "" } else { "s" },
             if r.peer.is_ok() {
                 ", alternating with the peer's"
             } else {

@@ -148,9 +148,18 @@ pub fn measure(accel: &Accel, work: &Workloads, threads: usize, reps: usize) -> 
 /// peer's): each round adds its passes to the samples of the rounds before.
 #[derive(Default)]
 pub struct Measuring {
-    /// Per workload and engine, in [`measure`]'s order: its samples and the last round's
-    /// results (`None` after [`Measuring::forget_results`]).
-    sets: Vec<(Workload, Engine, usize, Samples, Option<Results>)>,
+    /// Per workload and engine, in [`measure`]'s order.
+    sets: Vec<Set>,
+}
+
+/// One engine on one workload, over the rounds so far.
+struct Set {
+    workload: Workload,
+    engine: Engine,
+    rays: usize,
+    samples: Samples,
+    /// The last round's results (`None` after [`Measuring::forget_results`]).
+    results: Option<Results>,
 }
 
 impl Measuring {
@@ -168,25 +177,29 @@ impl Measuring {
         for (workload, rays) in work.sets() {
             let packets = Packets::new(rays);
             for engine in Engine::ALL {
+                if first {
+                    self.sets.push(Set {
+                        workload,
+                        engine,
+                        rays: rays.len(),
+                        samples: Samples::default(),
+                        results: None,
+                    });
+                }
+                let set = &mut self.sets[i];
+                assert_eq!(
+                    (set.workload, set.engine),
+                    (workload, engine),
+                    "the same workloads"
+                );
                 let mut out = Out::new(engine, workload.any_hit(), rays);
-                let mut samples = Samples::default();
-                samples.take(
+                set.samples.take(
                     passes,
                     threads,
                     || {},
                     || pass(accel, rays, &packets, &mut out, pool.as_ref()),
                 );
-                let results = results_of(&out, rays.len());
-                if first {
-                    self.sets
-                        .push((workload, engine, rays.len(), samples, Some(results)));
-                } else {
-                    let set = &mut self.sets[i];
-                    assert_eq!((set.0, set.1), (workload, engine), "the same workloads");
-                    set.3.wall.extend(samples.wall);
-                    set.3.cpu.extend(samples.cpu);
-                    set.4 = Some(results);
-                }
+                set.results = Some(results_of(&out, rays.len()));
                 i += 1;
             }
         }
@@ -197,7 +210,7 @@ impl Measuring {
     /// they are about 120 MB, most of it the camera rays' hits for each engine.
     pub fn forget_results(&mut self) {
         for set in &mut self.sets {
-            set.4 = None;
+            set.results = None;
         }
     }
 
@@ -206,12 +219,12 @@ impl Measuring {
     pub fn finish(self) -> Vec<Measured> {
         self.sets
             .into_iter()
-            .map(|(workload, engine, rays, samples, results)| Measured {
-                workload,
-                engine,
-                rays,
-                timing: samples.timing(),
-                results: results.unwrap_or_default(),
+            .map(|s| Measured {
+                workload: s.workload,
+                engine: s.engine,
+                rays: s.rays,
+                timing: s.samples.timing(),
+                results: s.results.unwrap_or_default(),
             })
             .collect()
     }
