@@ -32,6 +32,7 @@ fn bench(c: &mut Criterion) {
             Workload::Primary | Workload::PrimaryHits => 201702,
             Workload::Shadow => 61028,
             Workload::Incoherent => 26102,
+            Workload::Random => 133563,
         };
         assert!(
             reference.count().abs_diff(expect) <= 5,

@@ -539,7 +539,7 @@ fn hybrid16_wide_packets_equal_scalar_on_coherent_rays() {
     use whitted::bench::{Workload, Workloads, triangles};
     let (mesh, _) = load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
     let accel = Accel::build(&triangles(&mesh), BuildQuality::Binned);
-    let work = Workloads::generate(&mesh, &accel, 320, 180);
+    let work = Workloads::generate_with(&mesh, &accel, 320, 180, 0);
     let shadow = work
         .sets()
         .into_iter()

@@ -66,7 +66,7 @@ fn small_mesh_workloads() {
     assert_eq!(mesh.open_edges(), 0);
     let accel = build(&mesh);
     let (w, h) = (96, 54);
-    let work = Workloads::generate(&mesh, &accel, w, h);
+    let work = Workloads::generate_with(&mesh, &accel, w, h, 4096);
     let fr = work.framing;
     assert!(!fr.canonical);
     // counts: every pixel once; one shadow and one incoherent ray per primary hit
@@ -127,14 +127,14 @@ fn small_mesh_workloads() {
         / hits.len() as f32;
     assert!((mean - 0.5).abs() < 0.1, "{mean}");
     // determinism
-    let again = Workloads::generate(&mesh, &build(&mesh), w, h);
+    let again = Workloads::generate_with(&mesh, &build(&mesh), w, h, 4096);
     for ((_, a), (_, b)) in work.sets().into_iter().zip(again.sets()) {
         assert_eq!(bench::ray_hash(a), bench::ray_hash(b));
     }
     // every engine agrees with the scalar reference on every set, and the counts are consistent
     let m = bench::measure(&accel, &work, 1, 1);
     let engines = bench::Engine::ALL.len();
-    assert_eq!(m.len(), 4 * engines);
+    assert_eq!(m.len(), 5 * engines);
     for set in m.chunks(engines) {
         for other in &set[1..] {
             assert_eq!(set[0].workload, other.workload);
@@ -201,6 +201,50 @@ fn kitten_matches_the_peers_hashes() {
         bench::ray_hash(&work.secondary.primary_hits),
         0xa8257c5afcd906a3
     );
+    // the peer's `--random 262144`: the same rays, so the same 133563 hits
+    assert_eq!(work.random.len(), bench::RANDOM_RAYS);
+    assert_eq!(work.random, bench::random_rays(&m0, bench::RANDOM_RAYS));
+    let accel = build(&m0);
+    let random_hits =
+        whitted::trace::trace_rays(&accel, &work.random, whitted::trace::Engine::Wide, false);
+    assert_eq!(random_hits.iter().flatten().count(), 133563);
+    let sets: Vec<Workload> = work.sets().iter().map(|s| s.0).collect();
+    assert_eq!(sets, Workload::ALL);
+}
+
+/// The random rays follow the peer's draws: origin x, y, z in the box, then z and phi.
+#[test]
+fn random_rays_are_the_peers_draws() {
+    let mesh = small_mesh();
+    let (lo, hi) = mesh.bounds().unwrap();
+    let rays = bench::random_rays(&mesh, 1000);
+    assert_eq!(rays.len(), 1000);
+    let mut s = bench::RANDOM_SEED;
+    let mut u = || bench::rng_unit(&mut s);
+    let o: Vec<f64> = (0..3)
+        .map(|e| lo[e] as f64 + u() * (hi[e] as f64 - lo[e] as f64))
+        .collect();
+    let z = 2.0 * u() - 1.0;
+    let phi = 2.0 * std::f64::consts::PI * u();
+    let r = (1.0 - z * z).sqrt();
+    assert_eq!(
+        rays[0].origin.to_array(),
+        [o[0] as f32, o[1] as f32, o[2] as f32]
+    );
+    assert_eq!(
+        rays[0].dir.to_array(),
+        [(r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32]
+    );
+    for r in &rays {
+        assert!(r.origin.cmpge(lo).all() && r.origin.cmple(hi).all());
+        assert!((r.dir.length() - 1.0).abs() < 1e-6);
+        assert_eq!((r.tnear, r.tfar), (0.0, f32::INFINITY));
+    }
+    // none without asking for them
+    let accel = build(&mesh);
+    let work = Workloads::generate_with(&mesh, &accel, 16, 9, 0);
+    assert!(work.random.is_empty());
+    assert!(work.sets().iter().all(|s| s.0 != Workload::Random));
 }
 
 /// With Embree's own per-pixel `(prim, t, Ng)` (the refdump tool's `primary_hitinfo.bin`), the
@@ -256,6 +300,11 @@ build MEDIUM (threads 1): wall best 8.35 ms, median 9.79 ms | process cpu best 8
   incoherent rtcIntersect8        201702 rays  wall best     5.57 med     4.61 | cpu best     5.57 med     4.68 Mrays/s
   incoherent rtcIntersect16       201702 rays  wall best     5.48 med     4.69 | cpu best     5.48 med     4.69 Mrays/s
   incoherent hits 26102 of 201702 (12.9%)
+ random rays (origins uniform in the bbox, directions uniform on the sphere, seed 7654321):
+  random rtcIntersect1            262144 rays  wall best     5.97 med     5.96 | cpu best     5.97 med     5.96 Mrays/s
+  random rtcIntersect8            262144 rays  wall best     6.44 med     6.43 | cpu best     6.44 med     6.43 Mrays/s
+  random rtcIntersect16           262144 rays  wall best     6.51 med     6.48 | cpu best     6.51 med     6.48 Mrays/s
+  random hits 133563 of 262144 (51.0%)
 "#;
 
 #[test]
@@ -268,7 +317,9 @@ fn parses_rt_bench_output() {
         (p.build_best_ms, p.build_median_ms),
         (Some(8.35), Some(9.79))
     );
-    assert_eq!(p.kernels.len(), 11);
+    assert_eq!(p.kernels.len(), 14);
+    assert_eq!(p.kernel(Workload::Random, 16).unwrap().cpu_median, 6.48);
+    assert_eq!(p.random_hits, Some(133563));
     let k = p.kernel(Workload::Primary, 8).unwrap();
     assert_eq!(k.rays, 2073600);
     assert_eq!(
@@ -385,6 +436,10 @@ fn bench_alternates_rounds_with_the_peer() {
     let calls = std::fs::read_to_string(&log).unwrap();
     assert_eq!(calls.lines().count(), 3, "{calls}");
     assert!(calls.lines().all(|c| c.contains("--reps 1")), "{calls}");
+    assert!(
+        calls.lines().all(|c| c.contains("--random 262144")),
+        "{calls}"
+    );
     let p = r.peer.as_ref().unwrap();
     assert_eq!(p.build_best_ms, Some(8.35));
     let text = bench::format_report(&r);
@@ -393,6 +448,57 @@ fn bench_alternates_rounds_with_the_peer() {
         text.contains("of 3 rounds, one pass each, alternating with the peer's"),
         "{text}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An rt-bench older than `--random` refuses the flag (usage, exit 2): the bench runs it
+/// without, and reports the random workload for whitted alone.
+#[test]
+fn bench_runs_an_older_peer_without_random() {
+    use std::os::unix::fs::PermissionsExt;
+    use whitted::bench::{Options, bench_mesh};
+    let dir = std::env::temp_dir().join(format!("whitted-old-peer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (peer, log, out) = (dir.join("rt-bench"), dir.join("calls"), dir.join("out.txt"));
+    let old: String = SAMPLE
+        .lines()
+        .take_while(|l| !l.starts_with(" random"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&out, old).unwrap();
+    std::fs::write(
+        &peer,
+        format!(
+            "#!/bin/sh\necho \"$*\" >> '{}'\ncase \"$*\" in *--random*) echo usage >&2; exit 2;; esac\ncat '{}'\n",
+            log.display(),
+            out.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&peer, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let cube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
+    let opts = Options {
+        width: 32,
+        height: 18,
+        reps: 2,
+        random: Some(5000),
+        peer: Some(peer.clone()),
+        ..Options::default()
+    };
+    let r = bench_mesh(&cube, &opts).unwrap();
+    let calls = std::fs::read_to_string(&log).unwrap();
+    // round 0: refused with --random, then without; round 1: without
+    let lines: Vec<&str> = calls.lines().collect();
+    assert_eq!(lines.len(), 3, "{calls}");
+    assert!(lines[0].contains("--random 5000") && !lines[1].contains("--random"));
+    let p = r.peer.as_ref().unwrap();
+    assert!(p.kernel(Workload::Random, 1).is_none());
+    assert_eq!(p.random_hits, None);
+    let m = r.get(Workload::Random, bench::Engine::Scalar).unwrap();
+    assert_eq!(m.rays, 5000);
+    let text = bench::format_report(&r);
+    let row = text.lines().find(|l| l.starts_with("random ")).unwrap();
+    assert!(row.trim_end().ends_with('-'), "{row}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -11,7 +11,10 @@
 //! - **shadow**: from each primary hit towards the light L1, origin pushed `eps` off the
 //!   surface on the light's side, `tfar` one ulp short of the light (any hit);
 //! - **incoherent**: one uniform hemisphere direction about the geometric normal per hit
-//!   (splitmix64, seed 1234567), origin pushed `eps` to the viewer's side (closest hit).
+//!   (splitmix64, seed 1234567), origin pushed `eps` to the viewer's side (closest hit);
+//! - **random**: `--random N` rays (262,144 unless told), origins uniform in the mesh's box and
+//!   directions uniform on the sphere (splitmix64, seed 7654321), bit for bit the peer's rays
+//!   ([`random_rays`]; closest hit).
 //!
 //! The secondary sets are built from whitted's *own* primary hits (`t` and the triangle's
 //! normal). Embree computes `t` with a different (unpublished) formula, so these two sets agree
@@ -39,7 +42,7 @@ use std::path::{Path, PathBuf};
 #[cfg_attr(feature = "cli", derive(clap::Args))]
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    /// Meshes (`.m` or `.obj`); default `meshes/kitten.m` from the current folder, the
+    /// Meshes (`.m`, `.obj` or `.ply`); default `meshes/kitten.m` from the current folder, the
     /// `WHITTED_ASSETS` folders or the copy whitted ships (the search path of scene files).
     pub meshes: Vec<PathBuf>,
     /// Tracing threads (also the peer's `--threads`); 1 traces on the calling thread.
@@ -59,6 +62,10 @@ pub struct Options {
     /// each of its kernels; every timed call, on both sides, follows an untimed warm-up.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 5))]
     pub reps: usize,
+    /// Rays of the random workload (origins anywhere in the mesh's box, directions anywhere;
+    /// also the peer's `--random`); 0 leaves it out. Default 262144.
+    #[cfg_attr(feature = "cli", arg(long, value_name = "N"))]
+    pub random: Option<usize>,
     /// Print one JSON object instead of tables.
     #[cfg_attr(feature = "cli", arg(long))]
     pub json: bool,
@@ -80,6 +87,8 @@ pub const MAX_SUBDIVIDE: u32 = 6;
 pub const MAX_TRIANGLES: u64 = 1 << 25;
 /// Cap of `whitted bench --width x --height` (8K is 2^25).
 pub const MAX_PIXELS: u64 = 1 << 26;
+/// Cap of `whitted bench --random`.
+pub const MAX_RANDOM: usize = 1 << 26;
 
 /// Load, subdivide, build, generate and time one mesh (and run the peer on it).
 pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
@@ -102,6 +111,12 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     if width as u64 * height as u64 > MAX_PIXELS {
         return Err(crate::Error::Usage(format!(
             "--width {width} --height {height}: over the cap of {MAX_PIXELS} pixels"
+        )));
+    }
+    let random = opts.random.unwrap_or(RANDOM_RAYS);
+    if random > MAX_RANDOM {
+        return Err(crate::Error::Usage(format!(
+            "--random {random}: over the cap of {MAX_RANDOM} rays"
         )));
     }
     // (the peak reported covers this mesh from here on: its subdivision, build, workloads
@@ -140,6 +155,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
     let mut accel = crate::accel::Accel::default();
     let mut peer_runs = peer_path.as_ref().map(|_| vec![]).map_err(Clone::clone);
     let mut peak_resident = None;
+    let mut peer_random = random;
     for round in 0..reps {
         // (the previous round's tree and results freed first, as in each timed build; the
         // results are recorded again by this round's passes)
@@ -148,7 +164,8 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
         let (a, c) = sample_build(&tris, 1, quality, threads, &mut build);
         accel = a;
         collapse = collapse.min(c);
-        let work = work.get_or_insert_with(|| Workloads::generate(&mesh, &accel, width, height));
+        let work = work
+            .get_or_insert_with(|| Workloads::generate_with(&mesh, &accel, width, height, random));
         measuring.round(&accel, work, threads, 1);
         if round == 0 {
             // (the first round's: a later round's build also runs beside the workloads,
@@ -156,7 +173,17 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
             peak_resident = peak_resident_bytes();
         }
         if let (Ok(p), Ok(runs)) = (&peer_path, &mut peer_runs) {
-            match run_peer(p, path, threads, opts.subdivide, 1, (width, height)) {
+            let run =
+                |random| run_peer(p, path, threads, opts.subdivide, 1, (width, height), random);
+            let mut got = run(peer_random);
+            if round == 0 && peer_random > 0 && got.is_err() {
+                // an rt-bench older than `--random` refuses the flag: whitted alone on that set
+                if let Ok(r) = run(0) {
+                    peer_random = 0;
+                    got = Ok(r);
+                }
+            }
+            match got {
                 Ok((r, _)) => runs.push(r),
                 Err(e) => peer_runs = Err(e),
             }

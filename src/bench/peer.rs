@@ -47,6 +47,8 @@ pub struct PeerReport {
     pub occluded: Option<usize>,
     /// Incoherent rays that hit.
     pub incoherent_hits: Option<usize>,
+    /// Random rays that hit (a peer run with `--random`).
+    pub random_hits: Option<usize>,
 }
 
 impl PeerReport {
@@ -93,6 +95,8 @@ pub fn parse_peer(text: &str) -> Result<PeerReport, String> {
             p.occluded = first_int(rest);
         } else if let Some(rest) = line.trim_start().strip_prefix("incoherent hits ") {
             p.incoherent_hits = first_int(rest);
+        } else if let Some(rest) = line.trim_start().strip_prefix("random hits ") {
+            p.random_hits = first_int(rest);
         } else if line.starts_with("  ") && line.contains(" rays  wall best ") {
             let (head, tail) = line.split_once(" rays  wall best ").unwrap();
             let head: Vec<&str> = head.split_whitespace().collect();
@@ -145,7 +149,8 @@ pub fn find_peer(explicit: Option<&Path>) -> Option<PathBuf> {
     })
 }
 
-/// Run the peer on `mesh` with the same options (`--quality medium`) and parse its output.
+/// Run the peer on `mesh` with the same options (`--quality medium`, `--random random`
+/// unless 0) and parse its output.
 pub fn run_peer(
     peer: &Path,
     mesh: &Path,
@@ -153,15 +158,20 @@ pub fn run_peer(
     subdivide: u32,
     reps: usize,
     (width, height): (u32, u32),
+    random: usize,
 ) -> Result<(PeerReport, String), String> {
-    let out = std::process::Command::new(peer)
-        .arg(mesh)
+    let mut cmd = std::process::Command::new(peer);
+    cmd.arg(mesh)
         .args(["--width", &width.to_string()])
         .args(["--height", &height.to_string()])
         .args(["--threads", &threads.to_string()])
         .args(["--subdivide", &subdivide.to_string()])
         .args(["--reps", &reps.to_string()])
-        .args(["--quality", "medium"])
+        .args(["--quality", "medium"]);
+    if random > 0 {
+        cmd.args(["--random", &random.to_string()]);
+    }
+    let out = cmd
         .output()
         .map_err(|e| format!("{}: {e}", peer.display()))?;
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -195,6 +205,7 @@ pub fn merge_peer(runs: &[PeerReport]) -> Result<PeerReport, String> {
                 p.primary_hits,
                 p.occluded,
                 p.incoherent_hits,
+                p.random_hits,
                 kernels,
             )
         };

@@ -279,19 +279,21 @@ pub fn format_report(r: &Report) -> String {
     let count = |w: Workload| r.get(w, Engine::Scalar).map_or(0, |m| m.results.count());
     let _ = write!(
         s,
-        "\nchecks: primary hits {}, occluded {}, incoherent hits {}",
+        "\nchecks: primary hits {}, occluded {}, incoherent hits {}, random hits {}",
         count(Workload::Primary),
         count(Workload::Shadow),
-        count(Workload::Incoherent)
+        count(Workload::Incoherent),
+        count(Workload::Random)
     );
     if let Some(p) = peer {
         let o = |v: Option<usize>| v.map_or("-".into(), |v| v.to_string());
         let _ = write!(
             s,
-            " (Embree {}, {}, {})",
+            " (Embree {}, {}, {}, {})",
             o(p.primary_hits),
             o(p.occluded),
-            o(p.incoherent_hits)
+            o(p.incoherent_hits),
+            o(p.random_hits)
         );
     }
     let _ = writeln!(s, "; packet-vs-scalar mismatches {}", r.mismatches());
@@ -407,7 +409,8 @@ pub fn report_json(r: &Report) -> serde_json::Value {
         "peer": match &r.peer {
             Ok(p) => json!({"version": p.version, "build_best_ms": p.build_best_ms,
                             "build_median_ms": p.build_median_ms, "primary_hits": p.primary_hits,
-                            "occluded": p.occluded, "incoherent_hits": p.incoherent_hits}),
+                            "occluded": p.occluded, "incoherent_hits": p.incoherent_hits,
+                            "random_hits": p.random_hits}),
             Err(e) => json!({"error": e}),
         },
     })

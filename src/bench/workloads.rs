@@ -1,4 +1,4 @@
-//! The peer's workloads, reproduced step for step: mesh subdivision, camera, the four ray sets.
+//! The peer's workloads, reproduced step for step: mesh subdivision, camera, the five ray sets.
 
 use crate::accel::{Accel, intersect1};
 use crate::mesh::Mesh;
@@ -12,6 +12,10 @@ pub const WIDTH: u32 = 1920;
 pub const HEIGHT: u32 = 1080;
 /// Seed of the incoherent directions (splitmix64).
 pub const SEED: u64 = 1234567;
+/// Seed of the random workload (splitmix64), the peer's `--random`.
+pub const RANDOM_SEED: u64 = 7654321;
+/// Rays of the random workload unless told otherwise (the peer's `--random` in `whitted bench`).
+pub const RANDOM_RAYS: usize = 262144;
 /// Rays per work item with more than one thread (the peer's `CHUNK`, a multiple of 16).
 pub const CHUNK: usize = 4096;
 
@@ -306,7 +310,29 @@ pub fn secondary_rays(fr: &Framing, primary: &[Ray], hits: &[Option<SurfaceHit>]
     out
 }
 
-/// All four workloads of one mesh.
+/// The peer's `--random n` rays: no coherence at all, as visibility sampling, lidar or
+/// inside/outside tests cast them. Ray `k` draws from splitmix64 seeded [`RANDOM_SEED`], in
+/// this order: the origin `lo + u * (hi - lo)` per axis x, y, z (uniform in the f32 box of all
+/// vertices, computed in f64), then `z = 2u - 1` and `phi = 2 pi u`; the direction is
+/// `(sqrt(1 - z^2) cos phi, sqrt(1 - z^2) sin phi, z)`; all in f64, stored as f32; `tnear 0`,
+/// `tfar inf`. On the kitten 133,563 of the first 262,144 hit.
+pub fn random_rays(mesh: &Mesh, n: usize) -> Vec<Ray> {
+    let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let mut s = RANDOM_SEED;
+    (0..n)
+        .map(|_| {
+            let o: [f64; 3] = std::array::from_fn(|e| {
+                lo[e] as f64 + rng_unit(&mut s) * (hi[e] as f64 - lo[e] as f64)
+            });
+            let z = 2.0 * rng_unit(&mut s) - 1.0;
+            let phi = 2.0 * std::f64::consts::PI * rng_unit(&mut s);
+            let s2 = (1.0 - z * z).max(0.0).sqrt();
+            ray_f32(o, [s2 * phi.cos(), s2 * phi.sin(), z], 0.0, f32::INFINITY)
+        })
+        .collect()
+}
+
+/// All five workloads of one mesh.
 #[derive(Clone, Debug)]
 pub struct Workloads {
     /// Camera, light and offset the sets were made with.
@@ -319,12 +345,26 @@ pub struct Workloads {
     pub primary: Vec<Ray>,
     /// The sets made from the primary hits ([`secondary_rays`]).
     pub secondary: Secondary,
+    /// Rays with origins anywhere in the box and directions anywhere ([`random_rays`]).
+    pub random: Vec<Ray>,
 }
 
 impl Workloads {
     /// The peer's workloads for `mesh` (traced by `accel`, built over `triangles(mesh)`),
-    /// the secondary sets from whitted's own single-ray hits. No culling.
+    /// the secondary sets from whitted's own single-ray hits, [`RANDOM_RAYS`] random rays.
+    /// No culling.
     pub fn generate(mesh: &Mesh, accel: &Accel, width: u32, height: u32) -> Workloads {
+        Workloads::generate_with(mesh, accel, width, height, RANDOM_RAYS)
+    }
+
+    /// [`Workloads::generate`] with `random` random rays (0: no random workload).
+    pub fn generate_with(
+        mesh: &Mesh,
+        accel: &Accel,
+        width: u32,
+        height: u32,
+        random: usize,
+    ) -> Workloads {
         let framing = Framing::of(mesh);
         let primary = primary_rays(&framing, width, height);
         let hits: Vec<Option<SurfaceHit>> = primary
@@ -343,21 +383,27 @@ impl Workloads {
             height,
             primary,
             secondary,
+            random: random_rays(mesh, random),
         }
     }
 
-    /// `(workload, rays)` in the peer's order (see [`Workload::any_hit`] for the query).
-    pub fn sets(&self) -> [(Workload, &[Ray]); 4] {
-        [
+    /// `(workload, rays)` in the peer's order (see [`Workload::any_hit`] for the query); the
+    /// random set only when it has rays.
+    pub fn sets(&self) -> Vec<(Workload, &[Ray])> {
+        let mut sets: Vec<(Workload, &[Ray])> = vec![
             (Workload::Primary, &self.primary),
             (Workload::PrimaryHits, &self.secondary.primary_hits),
             (Workload::Shadow, &self.secondary.shadow),
             (Workload::Incoherent, &self.secondary.incoherent),
-        ]
+        ];
+        if !self.random.is_empty() {
+            sets.push((Workload::Random, &self.random));
+        }
+        sets
     }
 }
 
-/// The four ray sets.
+/// The five ray sets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Workload {
     /// Pixel-centre camera rays (`primary`), closest hit.
@@ -368,15 +414,18 @@ pub enum Workload {
     Shadow,
     /// Hemisphere rays from the primary hits (`incoherent`), closest hit.
     Incoherent,
+    /// Origins uniform in the box, directions uniform on the sphere (`random`), closest hit.
+    Random,
 }
 
 impl Workload {
     /// Every workload, in the peer's order.
-    pub const ALL: [Workload; 4] = [
+    pub const ALL: [Workload; 5] = [
         Workload::Primary,
         Workload::PrimaryHits,
         Workload::Shadow,
         Workload::Incoherent,
+        Workload::Random,
     ];
 
     /// The peer's name (first word of its kernel lines).
@@ -386,6 +435,7 @@ impl Workload {
             Workload::PrimaryHits => "primary-hits-only",
             Workload::Shadow => "shadow",
             Workload::Incoherent => "incoherent",
+            Workload::Random => "random",
         }
     }
 
