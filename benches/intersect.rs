@@ -25,7 +25,7 @@ fn bench(c: &mut Criterion) {
         let packets = Packets::new(rays);
         let any = workload.any_hit();
         // checksum: every engine gives the same results, with the peer's counts on the kitten
-        let mut reference = Out::new(Engine::Scalar, any, rays);
+        let mut reference = Out::new(&accel, Engine::Scalar, any, rays);
         pass(&accel, rays, &packets, &mut reference, None);
         let reference = reference.results(rays.len());
         let expect = match workload {
@@ -45,8 +45,8 @@ fn bench(c: &mut Criterion) {
         g.sample_size(10);
         g.warm_up_time(Duration::from_millis(500));
         g.measurement_time(Duration::from_secs(2));
-        for engine in Engine::ALL {
-            let mut out = Out::new(engine, any, rays);
+        for engine in whitted::bench::ENGINES {
+            let mut out = Out::new(&accel, engine, any, rays);
             pass(&accel, rays, &packets, &mut out, None);
             let got = out.results(rays.len());
             assert_eq!(got.checksum(), reference.checksum(), "{}", engine.name());

@@ -26,6 +26,7 @@ pub mod aov;
 pub mod api;
 pub mod bench;
 pub mod camera;
+pub mod engine;
 pub mod error;
 pub mod image;
 pub mod info;

@@ -92,9 +92,11 @@ struct TraceArgs {
     /// Output hits: `u32 triangle, f32 t, f32 b1, f32 b2`, 16 bytes each.
     #[arg(long)]
     hits: PathBuf,
-    /// auto (= packet), packet (intersect8), wide (intersect_wide1, the 8-wide tree), hybrid
+    /// auto (chosen from the rays: how far apart neighbouring directions and origins are),
+    /// packet8 (intersect8), wide1 (intersect_wide1, the 8-wide tree), hybrid8
     /// (intersect_hybrid8), packet16 (intersect16, AVX-512), hybrid16 (intersect_hybrid16) or
-    /// scalar (intersect1); all write the same bytes.
+    /// scalar (intersect1); all write the same bytes. `packet`, `wide` and `hybrid` name the
+    /// 8-ray and single-ray engines too.
     #[arg(long, default_value = "auto")]
     engine: String,
     /// Skip back faces.
@@ -137,7 +139,7 @@ struct RenderArgs {
     /// Midpoint-subdivide every mesh K times (x4 triangles per level), to scale the work.
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
-    /// auto (wavefront renderer, fastest kernel per queue, default), packet, wide, hybrid,
+    /// auto (wavefront renderer, fastest kernel per queue, default), packet8, wide1, hybrid8,
     /// packet16 or hybrid16 (wavefront, that kernel for every queue; the 16-ray kernels need
     /// AVX-512, else they trace as packet and hybrid) or scalar (the recursive reference).
     #[arg(long, default_value = "auto")]
@@ -229,7 +231,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
     whitted::trace::Engine::from_name(name).ok_or_else(|| {
         Error::Usage(format!(
-            "unknown engine '{name}' (auto, packet, wide, hybrid, packet16, hybrid16, scalar)"
+            "unknown engine '{name}' (auto, packet8, wide1, hybrid8, packet16, hybrid16, scalar)"
         ))
     })
 }
@@ -245,7 +247,6 @@ fn check_subdivide(k: u32) -> Result<()> {
 }
 
 fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
-    use whitted::trace::trace_rays;
     let engine = parse_engine(&args.engine)?;
     check_subdivide(args.subdivide)?;
     set_threads(args.threads)?;
@@ -264,17 +265,25 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
     let bytes = std::fs::read(&args.rays).map_err(|e| Error::io(&args.rays, e))?;
     let rays = whitted::io::rays::parse_rays(&bytes, &args.rays)?;
     let start = std::time::Instant::now();
-    let hits = trace_rays(&accel, &rays, engine, args.cull);
+    let cpu = cpu_time::ProcessTime::now();
+    // (auto's choice is timed: it is part of every auto batch)
+    let (hits, chosen) = whitted::trace::trace_rays_with(&accel, &rays, engine, args.cull);
     let secs = start.elapsed().as_secs_f64();
+    let cpu = cpu.elapsed().as_secs_f64();
     std::fs::write(&args.hits, whitted::io::rays::encode_hits(&hits))
         .map_err(|e| Error::io(&args.hits, e))?;
     println!(
-        "{} rays, {} hits, {:.3} s, {:.2} Mrays/s ({} engine, {} triangles, BVH {:.1} ms)",
+        "{} rays, {} hits, {:.3} s, {:.2} Mrays/s, CPU {:.3} s ({} engine, {} triangles, BVH {:.1} ms)",
         rays.len(),
         hits.iter().filter(|h| h.is_some()).count(),
         secs,
         rays.len() as f64 / secs.max(1e-9) / 1e6,
-        args.engine,
+        cpu,
+        if engine == chosen {
+            chosen.name().to_string()
+        } else {
+            format!("{} -> {}", engine.name(), chosen.name())
+        },
         tris.len(),
         accel.build_time.as_secs_f64() * 1e3
     );

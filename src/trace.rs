@@ -1,110 +1,169 @@
-//! Tracing bare ray batches (no shading) with either engine: `whitted trace-rays`, benches.
+//! Tracing bare ray batches (no shading) with any engine: `whitted trace-rays`, the library's
+//! batch calls. Closest hits ([`trace_rays`]) and occlusion ([`occluded_rays`]), in input
+//! order, in parallel; `Engine::Auto` chooses the engine from the rays
+//! ([`crate::engine`]: the rule, and a pilot for large batches).
 
 use crate::accel::{
-    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide1, intersect1, intersect8,
-    intersect16,
+    Accel, intersect_hybrid8, intersect_hybrid16, intersect_wide1_many, intersect1, intersect8,
+    intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1_many, occluded1, occluded8,
+    occluded16,
 };
+use crate::engine::Choice;
 use crate::packet::RayPacket8;
 use crate::ray::{Hit, Ray};
+use crate::simd;
 use rayon::prelude::*;
 
-/// Which traversal to use. Every engine returns the same hits bit for bit.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Engine {
-    /// The fastest kernel per kind of ray, chosen by measurement: in the renderer per queue
-    /// (`render::wavefront::auto`), for bare ray batches `packet`.
-    #[default]
-    Auto,
-    /// `intersect8` on packets of 8 consecutive rays over the binary tree.
-    Packet,
-    /// `intersect_wide1` ray by ray over the 8-wide tree.
-    Wide,
-    /// `intersect_hybrid8`: packets of 8 over the binary tree that hand their last few
-    /// lanes to single-ray traversal of the 8-wide tree.
-    Hybrid,
-    /// `intersect16` on packets of 16 consecutive rays over the binary tree (AVX-512; two
-    /// `intersect8` calls on a CPU without it).
-    Packet16,
-    /// `intersect_hybrid16`: 16-ray packets down the 8-wide tree together when their lanes
-    /// share a direction octant, else down the binary tree, each lane alone down the 8-wide
-    /// tree once few remain (AVX-512; two `intersect_hybrid8` calls without it).
-    Hybrid16,
-    /// `intersect1` ray by ray over the binary tree (the reference).
-    Scalar,
-}
+pub use crate::engine::Engine;
 
-impl Engine {
-    /// Every engine, by name.
-    pub const ALL: [Engine; 7] = [
-        Engine::Auto,
-        Engine::Packet,
-        Engine::Wide,
-        Engine::Hybrid,
-        Engine::Packet16,
-        Engine::Hybrid16,
-        Engine::Scalar,
-    ];
-
-    /// The engine's name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Engine::Auto => "auto",
-            Engine::Packet => "packet",
-            Engine::Wide => "wide",
-            Engine::Hybrid => "hybrid",
-            Engine::Packet16 => "packet16",
-            Engine::Hybrid16 => "hybrid16",
-            Engine::Scalar => "scalar",
-        }
-    }
-
-    /// The engine called `name`.
-    pub fn from_name(name: &str) -> Option<Engine> {
-        Engine::ALL.into_iter().find(|e| e.name() == name)
-    }
-}
-
-/// Rays per parallel work item (a multiple of 8).
+/// Rays per parallel work item (a multiple of 16).
 const CHUNK: usize = 4096;
 
-/// Closest hits of `rays`, in parallel, in input order.
+/// Closest hits of `rays`, in parallel, in input order; `Engine::Auto` chooses the engine
+/// from the rays ([`resolve`]).
 pub fn trace_rays(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool) -> Vec<Option<Hit>> {
-    rays.par_chunks(CHUNK)
-        .flat_map_iter(|chunk| {
-            let mut out = Vec::with_capacity(chunk.len());
-            match engine {
-                Engine::Scalar => out.extend(chunk.iter().map(|r| intersect1(accel, r, cull))),
-                Engine::Wide => {
-                    out.extend(chunk.iter().map(|r| intersect_wide1(accel, r, cull)));
-                }
-                Engine::Packet16 | Engine::Hybrid16 => {
-                    let f = if engine == Engine::Hybrid16 {
-                        intersect_hybrid16
-                    } else {
-                        intersect16
-                    };
-                    for group in chunk.chunks(16) {
-                        let (lo, hi) = group.split_at(group.len().min(8));
-                        let (p0, a0) = RayPacket8::from_fn(|i| lo.get(i).copied());
-                        let (p1, a1) = RayPacket8::from_fn(|i| hi.get(i).copied());
-                        let hits = f(accel, [&p0, &p1], [a0, a1], cull);
-                        out.extend((0..group.len()).map(|i| hits[i / 8].lane(i % 8)));
-                    }
-                }
-                Engine::Auto | Engine::Packet | Engine::Hybrid => {
-                    let f = if engine == Engine::Hybrid {
-                        intersect_hybrid8
-                    } else {
-                        intersect8
-                    };
-                    for group in chunk.chunks(8) {
-                        let (packet, active) = RayPacket8::from_fn(|i| group.get(i).copied());
-                        let hits = f(accel, &packet, active, cull);
-                        out.extend((0..group.len()).map(|i| hits.lane(i)));
-                    }
+    trace_rays_with(accel, rays, engine, cull).0
+}
+
+/// [`trace_rays`], and the engine that traced them (`auto`'s choice).
+pub fn trace_rays_with(
+    accel: &Accel,
+    rays: &[Ray],
+    engine: Engine,
+    cull: bool,
+) -> (Vec<Option<Hit>>, Engine) {
+    let mut out = vec![None; rays.len()];
+    let engine = resolve(engine, accel, rays, |e, r| {
+        intersect_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+    });
+    out.par_chunks_mut(CHUNK)
+        .zip(rays.par_chunks(CHUNK))
+        .for_each(|(o, r)| intersect_run(accel, r, engine, cull, o));
+    (out, engine)
+}
+
+/// Whether each ray of `rays` is blocked within `(tnear, tfar)` (any hit), in parallel, in
+/// input order; `Engine::Auto` chooses the engine from the rays ([`resolve`]).
+pub fn occluded_rays(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool) -> Vec<bool> {
+    occluded_rays_with(accel, rays, engine, cull).0
+}
+
+/// [`occluded_rays`], and the engine that traced them (`auto`'s choice).
+pub fn occluded_rays_with(
+    accel: &Accel,
+    rays: &[Ray],
+    engine: Engine,
+    cull: bool,
+) -> (Vec<bool>, Engine) {
+    let mut out = vec![false; rays.len()];
+    let engine = resolve(engine, accel, rays, |e, r| {
+        occluded_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+    });
+    out.par_chunks_mut(CHUNK)
+        .zip(rays.par_chunks(CHUNK))
+        .for_each(|(o, r)| occluded_run(accel, r, engine, cull, o));
+    (out, engine)
+}
+
+/// `engine`, or for `auto` the engine for `rays`: the rule's one candidate, or of two the
+/// faster on a pilot (`run(engine, range)` traces `rays[range]`; see
+/// [`crate::engine::pilot`]), on the calling thread.
+pub fn resolve(
+    engine: Engine,
+    accel: &Accel,
+    rays: &[Ray],
+    run: impl FnMut(Engine, std::ops::Range<usize>),
+) -> Engine {
+    if engine != Engine::Auto {
+        return engine;
+    }
+    match crate::engine::choices(accel, rays) {
+        Choice::One(e) => e,
+        Choice::Try(two) => crate::engine::pilot(two, rays.len(), run),
+    }
+}
+
+/// 8 or 16 consecutive rays as packets of 8 (padding lanes inactive).
+fn packets<const N: usize>(group: &[Ray]) -> [(RayPacket8, simd::M32x8); N] {
+    std::array::from_fn(|h| RayPacket8::from_fn(|i| group.get(8 * h + i).copied()))
+}
+
+/// Closest hits of a run of rays with a concrete engine (`auto` as `packet8`), into `out`.
+fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &mut [Option<Hit>]) {
+    match engine {
+        Engine::Scalar => {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = intersect1(accel, r, cull);
+            }
+        }
+        Engine::Wide => intersect_wide1_many(accel, rays, cull, out),
+        Engine::Packet16 | Engine::Hybrid16 => {
+            let f = if engine == Engine::Hybrid16 {
+                intersect_hybrid16
+            } else {
+                intersect16
+            };
+            for (group, o) in rays.chunks(16).zip(out.chunks_mut(16)) {
+                let [(p0, a0), (p1, a1)] = packets::<2>(group);
+                let hits = f(accel, [&p0, &p1], [a0, a1], cull);
+                for (i, o) in o.iter_mut().enumerate() {
+                    *o = hits[i / 8].lane(i % 8);
                 }
             }
-            out
-        })
-        .collect()
+        }
+        Engine::Auto | Engine::Packet | Engine::Hybrid => {
+            let f = if engine == Engine::Hybrid {
+                intersect_hybrid8
+            } else {
+                intersect8
+            };
+            for (group, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
+                let [(p, a)] = packets::<1>(group);
+                let hits = f(accel, &p, a, cull);
+                for (i, o) in o.iter_mut().enumerate() {
+                    *o = hits.lane(i);
+                }
+            }
+        }
+    }
+}
+
+/// Occlusion of a run of rays with a concrete engine (`auto` as `packet8`), into `out`.
+fn occluded_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &mut [bool]) {
+    match engine {
+        Engine::Scalar => {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = occluded1(accel, r, cull);
+            }
+        }
+        Engine::Wide => occluded_wide1_many(accel, rays, cull, out),
+        Engine::Packet16 | Engine::Hybrid16 => {
+            let f = if engine == Engine::Hybrid16 {
+                occluded_hybrid16
+            } else {
+                occluded16
+            };
+            for (group, o) in rays.chunks(16).zip(out.chunks_mut(16)) {
+                let [(p0, a0), (p1, a1)] = packets::<2>(group);
+                let m = f(accel, [&p0, &p1], [a0, a1], cull).map(simd::bitmask);
+                for (i, o) in o.iter_mut().enumerate() {
+                    *o = m[i / 8] >> (i % 8) & 1 == 1;
+                }
+            }
+        }
+        Engine::Auto | Engine::Packet | Engine::Hybrid => {
+            let f = if engine == Engine::Hybrid {
+                occluded_hybrid8
+            } else {
+                occluded8
+            };
+            for (group, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
+                let [(p, a)] = packets::<1>(group);
+                let m = simd::bitmask(f(accel, &p, a, cull));
+                for (i, o) in o.iter_mut().enumerate() {
+                    *o = m >> i & 1 == 1;
+                }
+            }
+        }
+    }
 }

@@ -189,7 +189,7 @@ fn wide_tree_collapse_against_cwbvh() {
             let mut results = vec![];
             for _ in 0..3 {
                 for (k, a) in [&ours, &theirs].into_iter().enumerate() {
-                    let mut out = Out::new(Engine::Wide, w.any_hit(), rays);
+                    let mut out = Out::new(&ours, Engine::Wide, w.any_hit(), rays);
                     let t = Instant::now();
                     pass(a, rays, &packets, &mut out, None);
                     best[k] = best[k].min(t.elapsed().as_secs_f64());

@@ -6,6 +6,7 @@ use crate::accel::{
     intersect16, occluded_hybrid8, occluded_hybrid16, occluded_wide1_many, occluded1, occluded8,
     occluded16,
 };
+use crate::engine::Choice;
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::ray::Ray;
@@ -87,6 +88,9 @@ pub enum Out {
     Hits16(Vec<HitPacket8>, Intersect16),
     /// 16-ray packets any hit, stored as `Occ8`.
     Occ16(Vec<u8>, Occluded16),
+    /// `auto`: the buffers of each candidate for the set; each pass chooses again (the
+    /// choice and its pilot are part of the timed pass, as of every `auto` batch call).
+    Auto(Vec<(Engine, Out)>, Engine),
 }
 
 /// A single-ray closest-hit kernel on a run of rays, one hit per ray into the output
@@ -119,58 +123,19 @@ pub type Intersect16 = fn(&Accel, [&RayPacket8; 2], [M32x8; 2], bool) -> [HitPac
 /// A 16-ray any-hit kernel (`occluded16`).
 pub type Occluded16 = fn(&Accel, [&RayPacket8; 2], [M32x8; 2], bool) -> [M32x8; 2];
 
-/// The engines timed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Engine {
-    /// `intersect1` / `occluded1` on the binary tree, ray by ray (the reference).
-    Scalar,
-    /// `intersect8` / `occluded8` on the binary tree, 8 consecutive rays.
-    Packet,
-    /// `intersect_wide1` / `occluded_wide1` on the 8-wide tree, ray by ray (through the
-    /// batch entries `intersect_wide1_many` / `occluded_wide1_many`).
-    Wide,
-    /// `intersect_hybrid8` / `occluded_hybrid8`: packets on the binary tree, single rays on
-    /// the wide tree once few lanes remain.
-    Hybrid,
-    /// `intersect16` / `occluded16` on the binary tree, 16 consecutive rays (AVX-512; two
-    /// `packet8` calls on a CPU without it).
-    Packet16,
-    /// `intersect_hybrid16` / `occluded_hybrid16`: 16-ray packets down the wide tree
-    /// together (any hit, and closest hit when the lanes share an octant), or down the binary
-    /// tree (closest hit, mixed octants), each lane alone once few remain (two `hybrid8`
-    /// calls without AVX-512).
-    Hybrid16,
-}
+pub use crate::engine::Engine;
 
-impl Engine {
-    /// Every engine, in report order.
-    pub const ALL: [Engine; 6] = [
-        Engine::Scalar,
-        Engine::Packet,
-        Engine::Wide,
-        Engine::Hybrid,
-        Engine::Packet16,
-        Engine::Hybrid16,
-    ];
-
-    /// The engine's key in tables and JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            Engine::Scalar => "scalar",
-            Engine::Packet => "packet8",
-            Engine::Wide => "wide1",
-            Engine::Hybrid => "hybrid8",
-            Engine::Packet16 => "packet16",
-            Engine::Hybrid16 => "hybrid16",
-        }
-    }
-
-    /// Packet engines are compared with Embree's 8- and 16-wide packets, single-ray ones
-    /// with its single rays.
-    pub fn packet(self) -> bool {
-        !matches!(self, Engine::Scalar | Engine::Wide)
-    }
-}
+/// The engines timed, in report order: every concrete engine, the reference first, then
+/// `auto` (which traces with the one it chooses per set).
+pub const ENGINES: [Engine; 7] = [
+    Engine::Scalar,
+    Engine::Packet,
+    Engine::Wide,
+    Engine::Hybrid,
+    Engine::Packet16,
+    Engine::Hybrid16,
+    Engine::Auto,
+];
 
 fn hits8(
     accel: &Accel,
@@ -237,15 +202,20 @@ pub fn pass(
     pool: Option<&rayon::ThreadPool>,
 ) {
     let (pr, pa) = (&packets.rays[..], &packets.active[..]);
-    let Some(pool) = pool else {
-        match out {
-            Out::Hits(o, f) => f(accel, rays, false, o),
-            Out::Occ(o, f) => f(accel, rays, false, o),
-            Out::Hits8(o, f) => hits8(accel, *f, pr, pa, o),
-            Out::Occ8(o, f) => occ8(accel, *f, pr, pa, o),
-            Out::Hits16(o, f) => hits16(accel, *f, pr, pa, o),
-            Out::Occ16(o, f) => occ16(accel, *f, pr, pa, o),
+    if let Out::Auto(outs, chosen) = out {
+        fn of(outs: &mut [(Engine, Out)], e: Engine) -> &mut Out {
+            &mut outs.iter_mut().find(|o| o.0 == e).expect("a candidate").1
         }
+        *chosen = match crate::engine::choices(accel, rays) {
+            Choice::One(e) => e,
+            Choice::Try(two) => crate::engine::pilot(two, rays.len(), |e, r| {
+                pass_range(accel, rays, packets, of(outs, e), r)
+            }),
+        };
+        return pass(accel, rays, packets, of(outs, *chosen), pool);
+    }
+    let Some(pool) = pool else {
+        pass_range(accel, rays, packets, out, 0..rays.len());
         return;
     };
     const P: usize = CHUNK / 8;
@@ -275,12 +245,47 @@ pub fn pass(
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
             .for_each(|(o, (r, a))| occ16(accel, *f, r, a, o)),
+        Out::Auto(..) => unreachable!("auto passes on to its engine above"),
     })
 }
 
+/// A pass over `rays[range]` alone on the calling thread (`range` starts at a multiple of 16).
+fn pass_range(
+    accel: &Accel,
+    rays: &[Ray],
+    packets: &Packets,
+    out: &mut Out,
+    range: std::ops::Range<usize>,
+) {
+    let p = range.start / 8..range.end.div_ceil(8);
+    let (pr, pa) = (&packets.rays[p.clone()], &packets.active[p.clone()]);
+    match out {
+        Out::Hits(o, f) => f(accel, &rays[range.clone()], false, &mut o[range]),
+        Out::Occ(o, f) => f(accel, &rays[range.clone()], false, &mut o[range]),
+        Out::Hits8(o, f) => hits8(accel, *f, pr, pa, &mut o[p]),
+        Out::Occ8(o, f) => occ8(accel, *f, pr, pa, &mut o[p]),
+        Out::Hits16(o, f) => hits16(accel, *f, pr, pa, &mut o[p]),
+        Out::Occ16(o, f) => occ16(accel, *f, pr, pa, &mut o[p]),
+        Out::Auto(..) => unreachable!("auto passes on to its engine"),
+    }
+}
+
 impl Out {
-    /// Buffers for `engine` on `rays`, closest hit or any hit.
-    pub fn new(engine: Engine, any_hit: bool, rays: &[Ray]) -> Out {
+    /// Buffers for `engine` on `rays` in `accel`, closest hit or any hit (for `auto`, those
+    /// of the engine it chooses).
+    pub fn new(accel: &Accel, engine: Engine, any_hit: bool, rays: &[Ray]) -> Out {
+        if engine == Engine::Auto {
+            let choice = crate::engine::choices(accel, rays);
+            let cands = match choice {
+                Choice::One(e) => vec![e],
+                Choice::Try(two) => two.to_vec(),
+            };
+            let outs = cands
+                .into_iter()
+                .map(|e| (e, Out::new(accel, e, any_hit, rays)))
+                .collect();
+            return Out::Auto(outs, choice.first());
+        }
         let packets = rays.len().div_ceil(8);
         let (hits, occ) = (vec![None; rays.len()], vec![false; rays.len()]);
         let (hits8, occ8) = (vec![HitPacket8::none(); packets], vec![0; packets]);
@@ -297,6 +302,15 @@ impl Out {
             (Engine::Packet16, true) => Out::Occ16(occ8, occluded16),
             (Engine::Hybrid16, false) => Out::Hits16(hits8, intersect_hybrid16),
             (Engine::Hybrid16, true) => Out::Occ16(occ8, occluded_hybrid16),
+            (Engine::Auto, _) => unreachable!("auto is resolved above"),
+        }
+    }
+
+    /// `auto`'s choice (`None` for the other engines).
+    pub fn chosen(&self) -> Option<Engine> {
+        match self {
+            Out::Auto(_, chosen) => Some(*chosen),
+            _ => None,
         }
     }
 
@@ -308,6 +322,10 @@ impl Out {
 
 pub(super) fn results_of(out: &Out, n: usize) -> Results {
     match out {
+        Out::Auto(outs, chosen) => results_of(
+            &outs.iter().find(|o| o.0 == *chosen).expect("a candidate").1,
+            n,
+        ),
         Out::Hits(h, _) => hit_results(h.iter().copied()),
         Out::Occ(o, _) => Results {
             occluded: o.clone(),

@@ -64,7 +64,7 @@ impl Report {
             let Some(s) = self.get(w, Engine::Scalar) else {
                 continue;
             };
-            for e in Engine::ALL {
+            for e in ENGINES {
                 let Some(p) = self.get(w, e) else { continue };
                 let r = (&s.results, &p.results);
                 n += r.0.tri.iter().zip(&r.1.tri).filter(|(a, b)| a != b).count()
@@ -85,9 +85,10 @@ impl Report {
         n
     }
 
-    /// The fastest engine on `w` (CPU-time best, else wall-clock best) and its rate.
+    /// The fastest concrete engine on `w` (CPU-time best, else wall-clock best) and its
+    /// rate (`auto` traces with one of them, so it is not among the candidates).
     pub fn best_engine(&self, w: Workload) -> Option<(Engine, f64)> {
-        Engine::ALL
+        Engine::CONCRETE
             .iter()
             .filter_map(|&e| {
                 let m = self.get(w, e)?;
@@ -210,9 +211,10 @@ pub fn format_report(r: &Report) -> String {
             }
         );
         let _ = write!(s, "{:<18} {:>8} |", "workload", "rays");
-        for e in Engine::ALL {
+        for e in ENGINES {
             let _ = write!(s, " {:>15}", e.name());
         }
+        let _ = write!(s, " | {:>17}", "auto chose / best");
         if peer.is_some() {
             let _ = write!(
                 s,
@@ -247,9 +249,22 @@ pub fn format_report(r: &Report) -> String {
                 None => "-".into(),
             };
             let _ = write!(s, "{:<18} {:>8} |", w.name(), sc.rays);
-            for e in Engine::ALL {
+            for e in ENGINES {
                 let _ = write!(s, " {:>15}", cell(ours(e)));
             }
+            let best_ours = Engine::CONCRETE
+                .iter()
+                .filter_map(|&e| Some((e, ours(e)?.0)))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let auto = r
+                .get(w, Engine::Auto)
+                .and_then(|m| Some((m.chosen?, ours(Engine::Auto)?.0)));
+            let _ = match auto.zip(best_ours) {
+                Some(((c, a), (_, b))) => {
+                    write!(s, " | {:>17}", format!("{} {:.2}", c.name(), a / b))
+                }
+                None => write!(s, " | {:>17}", "-"),
+            };
             if peer.is_some() {
                 let _ = write!(
                     s,
@@ -258,10 +273,6 @@ pub fn format_report(r: &Report) -> String {
                     cell(theirs(8)),
                     cell(theirs(16))
                 );
-                let best_ours = Engine::ALL
-                    .iter()
-                    .filter_map(|&e| Some((e, ours(e)?.0)))
-                    .max_by(|a, b| a.1.total_cmp(&b.1));
                 let best_theirs = [1, 8, 16]
                     .iter()
                     .filter_map(|&k| Some((k, theirs(k)?.0)))
@@ -335,13 +346,13 @@ pub fn report_json(r: &Report) -> serde_json::Value {
             let sc = r.get(w, Engine::Scalar)?;
             let mut ratios = serde_json::Map::new();
             let mut mrays = serde_json::Map::new();
-            for e in Engine::ALL {
+            for e in ENGINES {
                 if let Some(m) = r.get(w, e) {
                     mrays.insert(e.name().into(), rate(m.rays, &m.timing));
                 }
             }
             if let Some(p) = peer {
-                for e in Engine::ALL {
+                for e in ENGINES {
                     let Some(m) = r.get(w, e) else { continue };
                     for width in if e.packet() { &[8, 16][..] } else { &[1][..] } {
                         let width = *width;
@@ -377,6 +388,7 @@ pub fn report_json(r: &Report) -> serde_json::Value {
                 "checksum": format!("{:016x}", sc.results.checksum()),
                 "whitted_mrays": mrays,
                 "best_engine": r.best_engine(w).map(|b| b.0.name()),
+                "auto_chose": r.get(w, Engine::Auto).and_then(|m| m.chosen).map(Engine::name),
                 "embree_mrays": embree,
                 "ratio": ratios,
             }))

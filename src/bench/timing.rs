@@ -134,6 +134,8 @@ pub struct Measured {
     pub timing: Timing,
     /// What the last pass found, per ray.
     pub results: Results,
+    /// For `auto`, the engine it chose for the set.
+    pub chosen: Option<Engine>,
 }
 
 /// Time every engine on every workload (`reps` passes after a warm-up each), on the calling
@@ -160,6 +162,8 @@ struct Set {
     samples: Samples,
     /// The last round's results (`None` after [`Measuring::forget_results`]).
     results: Option<Results>,
+    /// `auto`'s choice.
+    chosen: Option<Engine>,
 }
 
 impl Measuring {
@@ -176,7 +180,7 @@ impl Measuring {
         let mut i = 0;
         for (workload, rays) in work.sets() {
             let packets = Packets::new(rays);
-            for engine in Engine::ALL {
+            for engine in ENGINES {
                 if first {
                     self.sets.push(Set {
                         workload,
@@ -184,6 +188,7 @@ impl Measuring {
                         rays: rays.len(),
                         samples: Samples::default(),
                         results: None,
+                        chosen: None,
                     });
                 }
                 let set = &mut self.sets[i];
@@ -192,7 +197,7 @@ impl Measuring {
                     (workload, engine),
                     "the same workloads"
                 );
-                let mut out = Out::new(engine, workload.any_hit(), rays);
+                let mut out = Out::new(accel, engine, workload.any_hit(), rays);
                 set.samples.take(
                     passes,
                     threads,
@@ -200,6 +205,7 @@ impl Measuring {
                     || pass(accel, rays, &packets, &mut out, pool.as_ref()),
                 );
                 set.results = Some(results_of(&out, rays.len()));
+                set.chosen = out.chosen();
                 i += 1;
             }
         }
@@ -225,6 +231,7 @@ impl Measuring {
                 rays: s.rays,
                 timing: s.samples.timing(),
                 results: s.results.unwrap_or_default(),
+                chosen: s.chosen,
             })
             .collect()
     }

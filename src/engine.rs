@@ -1,0 +1,308 @@
+//! The engines, one list for `trace`, `bench` and `render`, and `auto`'s choice among them
+//! from what a batch of rays is.
+//!
+//! Every engine returns the same hits bit for bit (`intersect1`'s); they differ in how many
+//! rays go down which tree together. `auto` looks at the batch before tracing it
+//! ([`choices`]): how far apart the directions and the origins of neighbouring rays are, over
+//! a sample of the 16-ray groups the packet engines would form ([`spread`]). Which engine
+//! wins for which kind of batch is a measurement (`docs/engines.md`); the rule follows it:
+//!
+//! | the batch's 16-ray groups | candidates (AVX-512) | candidates (without) |
+//! |---|---|---|
+//! | one octant, directions within a few degrees (camera, shadow rays to a point light) | `packet16`, `hybrid16` | `hybrid8`, `packet8` |
+//! | directions apart, origins close together (bounces off neighbouring hits) | `hybrid16`, `wide1` | `hybrid8`, `wide1` |
+//! | directions and origins apart (random rays, lidar, inside/outside tests) | `wide1` | `wide1` |
+//!
+//! Where two engines are candidates, which is faster depends on the mesh as well (how soon
+//! a packet's lanes part), so a batch of at least [`PILOT_MIN`] rays settles it by a pilot
+//! ([`pilot`]): one 128-ray block in 512 (at least 16), spread over the batch, each traced by
+//! both and timed; the batch is then traced by the faster (the pilot's blocks again: 0.4% of
+//! a large batch's rays are traced twice more, 3.1% at [`PILOT_MIN`], 2% at the bench's
+//! 201,702 rays). Smaller batches (and the renderer's tile-sized queues) take the first
+//! candidate.
+
+use crate::accel::Accel;
+use crate::ray::Ray;
+
+/// Which traversal traces a batch. Every engine returns the same hits bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Engine {
+    /// Chosen per batch from the rays ([`choose`]); in the renderer per queue.
+    #[default]
+    Auto,
+    /// `intersect1` / `occluded1` ray by ray over the binary tree (the reference).
+    Scalar,
+    /// `intersect8` / `occluded8`: packets of 8 consecutive rays over the binary tree.
+    Packet,
+    /// `intersect_wide1` / `occluded_wide1`: ray by ray over the 8-wide tree.
+    Wide,
+    /// `intersect_hybrid8` / `occluded_hybrid8`: packets of 8 over the binary tree that hand
+    /// their last few lanes to single-ray traversal of the 8-wide tree.
+    Hybrid,
+    /// `intersect16` / `occluded16`: packets of 16 over the binary tree (AVX-512; two
+    /// `packet8` calls on a CPU without it).
+    Packet16,
+    /// `intersect_hybrid16` / `occluded_hybrid16`: 16-ray packets down the 8-wide tree
+    /// together (any hit, and closest hit when the lanes share an octant), else down the
+    /// binary tree, each lane alone once few remain (AVX-512; two `hybrid8` calls without).
+    Hybrid16,
+}
+
+impl Engine {
+    /// Every engine, `auto` first.
+    pub const ALL: [Engine; 7] = [
+        Engine::Auto,
+        Engine::Scalar,
+        Engine::Packet,
+        Engine::Wide,
+        Engine::Hybrid,
+        Engine::Packet16,
+        Engine::Hybrid16,
+    ];
+
+    /// The engines that trace (all but `auto`), the reference first.
+    pub const CONCRETE: [Engine; 6] = [
+        Engine::Scalar,
+        Engine::Packet,
+        Engine::Wide,
+        Engine::Hybrid,
+        Engine::Packet16,
+        Engine::Hybrid16,
+    ];
+
+    /// The engine's name (`--engine`, tables, JSON).
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::Auto => "auto",
+            Engine::Scalar => "scalar",
+            Engine::Packet => "packet8",
+            Engine::Wide => "wide1",
+            Engine::Hybrid => "hybrid8",
+            Engine::Packet16 => "packet16",
+            Engine::Hybrid16 => "hybrid16",
+        }
+    }
+
+    /// The engine called `name`: its [`name`](Engine::name), or `packet`, `wide`, `hybrid`
+    /// for the 8-ray and single-ray engines.
+    pub fn from_name(name: &str) -> Option<Engine> {
+        match name {
+            "packet" => Some(Engine::Packet),
+            "wide" => Some(Engine::Wide),
+            "hybrid" => Some(Engine::Hybrid),
+            _ => Engine::ALL.into_iter().find(|e| e.name() == name),
+        }
+    }
+
+    /// Packet engines are compared with Embree's 8- and 16-wide packets, single-ray ones
+    /// with its single rays (`auto` with both).
+    pub fn packet(self) -> bool {
+        !matches!(self, Engine::Scalar | Engine::Wide)
+    }
+}
+
+/// How far apart neighbouring rays of a batch are, over a sample of its 16-ray groups.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spread {
+    /// Groups sampled.
+    pub groups: usize,
+    /// Share of the sampled groups whose directions are not all in one octant.
+    pub mixed_octants: f32,
+    /// Mean over the groups of the largest angle (as `1 - cos`) between a direction and
+    /// the group's first.
+    pub direction: f32,
+    /// Mean over the groups of the largest distance between an origin and the group's
+    /// first, over the diagonal of the scene's box.
+    pub origin: f32,
+}
+
+/// Groups of 16 consecutive rays [`spread`] looks at, at most (spaced evenly over the batch).
+pub const SAMPLE_GROUPS: usize = 64;
+
+/// Directions within this `1 - cos` of their group's first (about 8 degrees) count as one
+/// beam: camera rays (`1 - cos` about 1e-5 between neighbouring pixels) and shadow rays
+/// towards a point light (about 1e-4) are far below it, bounce rays (about 0.9) far above.
+pub const BEAM: f32 = 0.01;
+
+/// Origins within this share of the scene's diagonal of their group's first count as
+/// together: the hits of a 4x4 pixel block (a group's mean farthest 0.016 of the diagonal on
+/// the kitten at 1920x1080, 0.06 at 480x270) are below it, origins anywhere in the box (0.6
+/// to 0.8: the farthest of 15 points uniform in the box) far above.
+pub const TOGETHER: f32 = 0.2;
+
+/// [`Spread`] of `rays` in a scene of box diagonal `diagonal`.
+pub fn spread(rays: &[Ray], diagonal: f32) -> Spread {
+    let groups = rays.len().div_ceil(16);
+    let n = groups.min(SAMPLE_GROUPS);
+    if n == 0 {
+        return Spread::default();
+    }
+    let (mut mixed, mut dir, mut org) = (0usize, 0.0f64, 0.0f64);
+    let scale = if diagonal > 0.0 && diagonal.is_finite() {
+        1.0 / diagonal
+    } else {
+        0.0
+    };
+    for k in 0..n {
+        let g = k * groups / n;
+        let group = &rays[g * 16..(g * 16 + 16).min(rays.len())];
+        let first = group[0];
+        let octant = |r: &Ray| r.dir.cmplt(glam::Vec3::ZERO).bitmask();
+        let d0 = first.dir.normalize_or_zero();
+        let (mut worst_cos, mut far) = (1.0f32, 0.0f32);
+        let mut same = true;
+        for r in group {
+            same &= octant(r) == octant(&first);
+            let c = r.dir.normalize_or_zero().dot(d0);
+            // (NaN directions count as apart)
+            worst_cos = if c.is_nan() { -1.0 } else { worst_cos.min(c) };
+            let dist = (r.origin - first.origin).length() * scale;
+            far = if dist.is_nan() { 1.0 } else { far.max(dist) };
+        }
+        mixed += !same as usize;
+        dir += (1.0 - worst_cos) as f64;
+        org += far.min(1.0) as f64;
+    }
+    Spread {
+        groups: n,
+        mixed_octants: mixed as f32 / n as f32,
+        direction: (dir / n as f64) as f32,
+        origin: (org / n as f64) as f32,
+    }
+}
+
+/// What the rays say before any is traced: one engine, or two to try on a pilot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Choice {
+    /// This engine, no pilot needed.
+    One(Engine),
+    /// The first by the rule alone, the second as good where the measurement says so
+    /// (`docs/engines.md`); a large batch lets a pilot ([`pilot`]) decide.
+    Try([Engine; 2]),
+}
+
+impl Choice {
+    /// The engine without a pilot.
+    pub fn first(self) -> Engine {
+        match self {
+            Choice::One(e) | Choice::Try([e, _]) => e,
+        }
+    }
+}
+
+/// The candidates for a batch by its [`Spread`] (the table of the module doc):
+/// - beams: `packet16` and `hybrid16` (AVX-512), or `hybrid8` and `packet8`. Camera rays
+///   from one eye go fastest in 16-ray packets; beams from many origins (shadow rays, the
+///   camera rays that hit) go as fast or faster with `hybrid16` on large meshes (1.3M
+///   triangles: shadow 6.0 against 4.8 Mrays/s), where the lanes part sooner;
+/// - scattered directions from origins close together: `hybrid16` and `wide1` (AVX-512), or
+///   `hybrid8` and `wide1` (on the kitten the hybrid leads, at 1.3M triangles `wide1` by a
+///   little);
+/// - scattered in both: `wide1` alone (random rays: 1.2x `hybrid16` at 20k triangles and
+///   1.1x at 1.3M; packets lose half).
+pub fn candidates(s: Spread, avx512: bool) -> Choice {
+    if s.groups == 0 {
+        return Choice::One(Engine::Wide);
+    }
+    let (beam, scattered) = if avx512 {
+        (
+            [Engine::Packet16, Engine::Hybrid16],
+            [Engine::Hybrid16, Engine::Wide],
+        )
+    } else {
+        (
+            [Engine::Hybrid, Engine::Packet],
+            [Engine::Hybrid, Engine::Wide],
+        )
+    };
+    if s.direction < BEAM && s.mixed_octants < 0.5 {
+        Choice::Try(beam)
+    } else if s.origin < TOGETHER {
+        Choice::Try(scattered)
+    } else {
+        Choice::One(Engine::Wide)
+    }
+}
+
+/// The candidates for `rays` in `accel` ([`spread`] over the scene's box, then
+/// [`candidates`] with the AVX-512 kernels if the CPU runs them).
+pub fn choices(accel: &Accel, rays: &[Ray]) -> Choice {
+    let diagonal = accel.nodes.first().map_or(0.0, |n| {
+        (glam::Vec3::from(n.max) - glam::Vec3::from(n.min)).length()
+    });
+    candidates(spread(rays, diagonal), crate::accel::packet16::available())
+}
+
+/// The engine for `rays` by the rule alone, without a pilot ([`Choice::first`] of
+/// [`choices`]): what `auto` takes for batches under [`PILOT_MIN`] rays.
+pub fn choose(accel: &Accel, rays: &[Ray]) -> Engine {
+    choices(accel, rays).first()
+}
+
+/// [`choose`]'s rule on a measured spread, with or without the AVX-512 kernels.
+pub fn choose_by(s: Spread, avx512: bool) -> Engine {
+    candidates(s, avx512).first()
+}
+
+/// Rays of one pilot block.
+pub const PILOT_BLOCK: usize = 128;
+/// A pilot traces one block in this many, at least [`PILOT_BLOCKS_MIN`].
+pub const PILOT_SHARE: usize = 512;
+/// Blocks a pilot traces at least (in pairs).
+pub const PILOT_BLOCKS_MIN: usize = 16;
+/// Batches of fewer rays take the rule's first candidate: their pilot would trace more than
+/// 1/64 of them twice over.
+pub const PILOT_MIN: usize = 64 * PILOT_BLOCKS_MIN * PILOT_BLOCK;
+
+/// The blocks of `n` rays a pilot traces: ray ranges of [`PILOT_BLOCK`] rays (multiples of
+/// 16 apart), evenly spaced over the batch, one in [`PILOT_SHARE`] and at least
+/// [`PILOT_BLOCKS_MIN`] (an even number); none under [`PILOT_MIN`] rays.
+pub fn pilot_blocks(n: usize) -> Vec<std::ops::Range<usize>> {
+    if n < PILOT_MIN {
+        return vec![];
+    }
+    let blocks = n / PILOT_BLOCK;
+    let count = (blocks / PILOT_SHARE).max(PILOT_BLOCKS_MIN) & !1;
+    (0..count)
+        .map(|k| {
+            let b = k * blocks / count;
+            b * PILOT_BLOCK..(b + 1) * PILOT_BLOCK
+        })
+        .collect()
+}
+
+/// Time the two candidates on the pilot blocks of a batch of `n` rays (`run(engine, rays)`
+/// traces the rays of one block with `engine`): both trace every block, `a` first on even
+/// blocks and `b` first on odd ones, so that what the first leaves in the cache favours
+/// each alike. Per pair of blocks the product of the two time ratios `a / b` cancels that
+/// order; `b` wins when the median product is below 1 (a block slowed by a preemption moves
+/// one product, not the median). With no pilot blocks (under [`PILOT_MIN`] rays), `a`.
+pub fn pilot(
+    [a, b]: [Engine; 2],
+    n: usize,
+    mut run: impl FnMut(Engine, std::ops::Range<usize>),
+) -> Engine {
+    let blocks = pilot_blocks(n);
+    if blocks.is_empty() {
+        return a;
+    }
+    let mut time = |e: Engine, r: std::ops::Range<usize>| {
+        let start = std::time::Instant::now();
+        run(e, r);
+        start.elapsed().as_secs_f64().max(1e-9)
+    };
+    let mut products: Vec<f64> = blocks
+        .chunks(2)
+        .map(|pair| {
+            let (ta0, tb0) = (time(a, pair[0].clone()), time(b, pair[0].clone()));
+            let (tb1, ta1) = (time(b, pair[1].clone()), time(a, pair[1].clone()));
+            (ta0 / tb0) * (ta1 / tb1)
+        })
+        .collect();
+    products.sort_unstable_by(f64::total_cmp);
+    if products[products.len() / 2] > 1.0 {
+        b
+    } else {
+        a
+    }
+}

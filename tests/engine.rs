@@ -1,0 +1,286 @@
+//! `auto`'s choice from the rays, and one list of engines for every front end.
+
+mod common;
+
+use glam::Vec3;
+use whitted::accel::{Accel, BuildQuality, intersect1};
+use whitted::bench::{Workload, Workloads, random_rays, triangles};
+use whitted::engine::{self, Choice, Engine, Spread, candidates, choose_by, spread};
+use whitted::io::load_mesh;
+use whitted::ray::Ray;
+
+fn kitten() -> (whitted::mesh::Mesh, Accel) {
+    let (mesh, _) = load_mesh(&common::assets().join("meshes/kitten.m")).unwrap();
+    let accel = Accel::build(&triangles(&mesh), BuildQuality::default());
+    (mesh, accel)
+}
+
+#[test]
+fn names_and_aliases() {
+    for e in Engine::ALL {
+        assert_eq!(Engine::from_name(e.name()), Some(e));
+    }
+    assert_eq!(Engine::from_name("packet"), Some(Engine::Packet));
+    assert_eq!(Engine::from_name("wide"), Some(Engine::Wide));
+    assert_eq!(Engine::from_name("hybrid"), Some(Engine::Hybrid));
+    assert_eq!(Engine::from_name("packet32"), None);
+    assert!(!Engine::CONCRETE.contains(&Engine::Auto));
+    assert_eq!(Engine::CONCRETE.len() + 1, Engine::ALL.len());
+    // the bench times every engine, auto among them
+    for e in Engine::ALL {
+        assert!(whitted::bench::ENGINES.contains(&e));
+    }
+}
+
+#[test]
+fn the_rule() {
+    let s = |direction, origin, mixed_octants| Spread {
+        groups: 64,
+        direction,
+        origin,
+        mixed_octants,
+    };
+    // beams: 16-ray packets, or hybrid8 without AVX-512
+    assert_eq!(choose_by(s(1e-5, 0.0, 0.0), true), Engine::Packet16);
+    assert_eq!(choose_by(s(1e-5, 0.0, 0.0), false), Engine::Hybrid);
+    assert_eq!(choose_by(s(1e-4, 0.3, 0.1), true), Engine::Packet16);
+    // a beam along an axis splits its octants: no longer a beam
+    assert_eq!(choose_by(s(1e-4, 0.001, 0.9), true), Engine::Hybrid16);
+    // scattered directions from neighbouring origins
+    assert_eq!(choose_by(s(0.9, 0.001, 1.0), true), Engine::Hybrid16);
+    assert_eq!(choose_by(s(0.9, 0.001, 1.0), false), Engine::Hybrid);
+    // scattered in both
+    assert_eq!(choose_by(s(1.0, 0.5, 1.0), true), Engine::Wide);
+    assert_eq!(choose_by(s(1.0, 0.5, 1.0), false), Engine::Wide);
+    // nothing to look at
+    assert_eq!(choose_by(Spread::default(), true), Engine::Wide);
+}
+
+/// The bench's five workloads on the kitten: camera rays and their compacted hits and the
+/// shadow rays are beams, the bounce rays scatter from neighbouring origins, the random
+/// rays scatter in both.
+#[test]
+fn spread_of_the_kitten_workloads() {
+    let (mesh, accel) = kitten();
+    let work = Workloads::generate_with(&mesh, &accel, 480, 270, 20000);
+    let diagonal = {
+        let (lo, hi) = mesh.bounds().unwrap();
+        (hi - lo).length()
+    };
+    for (w, rays) in work.sets() {
+        let s = spread(rays, diagonal);
+        assert_eq!(s.groups, engine::SAMPLE_GROUPS, "{w:?}");
+        let (beam, together) = match w {
+            Workload::Primary | Workload::PrimaryHits | Workload::Shadow => (true, true),
+            Workload::Incoherent => (false, true),
+            Workload::Random => (false, false),
+        };
+        assert_eq!(
+            s.direction < engine::BEAM && s.mixed_octants < 0.5,
+            beam,
+            "{w:?}: {s:?}"
+        );
+        if !beam {
+            assert_eq!(s.origin < engine::TOGETHER, together, "{w:?}: {s:?}");
+        }
+        let want = match (beam, together) {
+            (true, _) => choose_by(s, true),
+            (false, true) => Engine::Hybrid16,
+            (false, false) => Engine::Wide,
+        };
+        assert_eq!(choose_by(s, true), want, "{w:?}");
+        assert_eq!(
+            engine::choose(&accel, rays),
+            choose_by(s, whitted::accel::packet16::available())
+        );
+    }
+}
+
+#[test]
+fn spread_survives_odd_batches() {
+    let (_, accel) = kitten();
+    // empty, one ray, a partial group
+    assert_eq!(spread(&[], 1.0).groups, 0);
+    assert_eq!(engine::choose(&accel, &[]), Engine::Wide);
+    let one = [Ray::new(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY)];
+    let s = spread(&one, 1.0);
+    assert_eq!((s.groups, s.direction, s.origin), (1, 0.0, 0.0));
+    // NaN and zero directions, NaN and infinite origins: scattered, no panic
+    let odd = [
+        Ray::new(Vec3::ZERO, Vec3::NAN, 0.0, 1.0),
+        Ray::new(Vec3::NAN, Vec3::X, 0.0, 1.0),
+        Ray::new(Vec3::INFINITY, Vec3::ZERO, 0.0, 1.0),
+        Ray::new(Vec3::ZERO, Vec3::Y, 0.0, 1.0),
+    ];
+    let s = spread(&odd, 1.0);
+    assert!(s.direction.is_finite() && s.origin.is_finite(), "{s:?}");
+    assert_eq!(choose_by(s, true), Engine::Wide);
+    // a zero-size scene
+    assert!(spread(&odd, 0.0).origin.is_finite());
+    for e in Engine::ALL {
+        let hits = whitted::trace::trace_rays(&accel, &odd, e, false);
+        assert_eq!(hits.len(), odd.len());
+    }
+}
+
+/// `auto` and every engine return `intersect1`'s hits, bit for bit, on the random workload
+/// (and its reversed rays, culled and not) through the batch call.
+#[test]
+fn every_engine_is_intersect1_on_random_rays() {
+    let (mesh, accel) = kitten();
+    let mut rays = random_rays(&mesh, 6000);
+    rays.extend(
+        rays.clone()
+            .iter()
+            .map(|r| Ray::new(r.origin, -r.dir, 0.0, 0.7)),
+    );
+    let bits = |h: Option<whitted::ray::Hit>| {
+        h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+    };
+    for cull in [false, true] {
+        let want: Vec<_> = rays
+            .iter()
+            .map(|r| bits(intersect1(&accel, r, cull)))
+            .collect();
+        assert!(want.iter().flatten().count() > rays.len() / 10);
+        for e in Engine::ALL {
+            let got: Vec<_> = whitted::trace::trace_rays(&accel, &rays, e, cull)
+                .into_iter()
+                .map(bits)
+                .collect();
+            assert!(got == want, "{} cull {cull}", e.name());
+        }
+    }
+}
+
+#[test]
+fn candidates_by_kind_of_batch() {
+    let s = |direction, origin| Spread {
+        groups: 64,
+        direction,
+        origin,
+        mixed_octants: 0.0,
+    };
+    assert_eq!(
+        candidates(s(1e-5, 0.0), true),
+        Choice::Try([Engine::Packet16, Engine::Hybrid16])
+    );
+    assert_eq!(
+        candidates(s(1e-5, 0.0), false),
+        Choice::Try([Engine::Hybrid, Engine::Packet])
+    );
+    assert_eq!(
+        candidates(s(0.9, 0.01), true),
+        Choice::Try([Engine::Hybrid16, Engine::Wide])
+    );
+    assert_eq!(
+        candidates(s(0.9, 0.01), false),
+        Choice::Try([Engine::Hybrid, Engine::Wide])
+    );
+    assert_eq!(candidates(s(0.9, 0.6), true), Choice::One(Engine::Wide));
+    assert_eq!(
+        Choice::Try([Engine::Hybrid, Engine::Wide]).first(),
+        Engine::Hybrid
+    );
+}
+
+#[test]
+fn pilot_blocks_spread_over_the_batch() {
+    assert!(engine::pilot_blocks(engine::PILOT_MIN - 1).is_empty());
+    for n in [engine::PILOT_MIN, 201702, 262144, 2073600, 10_000_001] {
+        let b = engine::pilot_blocks(n);
+        assert!(
+            b.len() >= engine::PILOT_BLOCKS_MIN && b.len().is_multiple_of(2),
+            "{n}"
+        );
+        // at most 1/64 of the rays, and 1/512 of a large batch's
+        let rays: usize = b.iter().map(|r| r.len()).sum();
+        assert!(rays * 64 <= n, "{n}: {rays}");
+        if n >= 4_000_000 {
+            assert!(rays * 400 <= n, "{n}: {rays}");
+        }
+        for w in b.windows(2) {
+            assert!(w[0].end <= w[1].start);
+        }
+        assert!(b.iter().all(|r| r.start % 16 == 0 && r.end <= n));
+        // spread: the last block in the last tenth of the batch
+        assert!(b.last().unwrap().start > n - n / 10, "{n}");
+    }
+}
+
+/// The pilot takes the faster candidate; one slowed block does not move it; every block is
+/// traced by both; small batches take the first without a pilot.
+#[test]
+fn pilot_takes_the_faster() {
+    use std::time::{Duration, Instant};
+    let spin = |d: Duration| {
+        let t = Instant::now();
+        while t.elapsed() < d {}
+    };
+    let n = engine::PILOT_MIN;
+    for (slow, fast) in [
+        (Engine::Packet16, Engine::Hybrid16),
+        (Engine::Hybrid16, Engine::Packet16),
+    ] {
+        let mut calls = vec![];
+        let got = engine::pilot([Engine::Packet16, Engine::Hybrid16], n, |e, r| {
+            // one block of the fast engine preempted for a long while
+            let hiccup = calls.len() == 3;
+            calls.push((e, r));
+            spin(Duration::from_micros(if hiccup {
+                5000
+            } else if e == slow {
+                300
+            } else {
+                100
+            }));
+        });
+        assert_eq!(got, fast);
+        let blocks = engine::pilot_blocks(n);
+        assert_eq!(calls.len(), 2 * blocks.len());
+        for b in &blocks {
+            for e in [Engine::Packet16, Engine::Hybrid16] {
+                assert_eq!(calls.iter().filter(|c| c.0 == e && c.1 == *b).count(), 1);
+            }
+        }
+    }
+    let mut called = false;
+    let got = engine::pilot([Engine::Wide, Engine::Hybrid], n - 16, |_, _| called = true);
+    assert_eq!((got, called), (Engine::Wide, false));
+}
+
+/// A batch large enough for a pilot: `auto`'s hits and occlusion are every engine's.
+#[test]
+fn auto_with_a_pilot_is_exact() {
+    let (mesh, accel) = kitten();
+    let work = Workloads::generate_with(&mesh, &accel, 640, 360, engine::PILOT_MIN);
+    let random = &work.random;
+    let want = whitted::trace::trace_rays(&accel, random, Engine::Wide, false);
+    let (got, chosen) = whitted::trace::trace_rays_with(&accel, random, Engine::Auto, false);
+    assert!(got == want);
+    assert_eq!(chosen, Engine::Wide);
+    // bounce rays, repeated up to the pilot's size: two candidates, a pilot decides
+    let mut bounce = work.secondary.incoherent.clone();
+    while bounce.len() < engine::PILOT_MIN {
+        bounce.extend_from_within(..bounce.len().min(engine::PILOT_MIN - bounce.len()));
+    }
+    let Choice::Try(two) = engine::choices(&accel, &bounce) else {
+        panic!("bounce rays have two candidates")
+    };
+    let want = whitted::trace::trace_rays(&accel, &bounce, Engine::Scalar, true);
+    let (got, chosen) = whitted::trace::trace_rays_with(&accel, &bounce, Engine::Auto, true);
+    assert!(got == want);
+    assert!(two.contains(&chosen), "{chosen:?}");
+    // occlusion: shadow rays (beams), repeated likewise
+    let mut shadow = work.secondary.shadow.clone();
+    while shadow.len() < engine::PILOT_MIN {
+        shadow.extend_from_within(..shadow.len().min(engine::PILOT_MIN - shadow.len()));
+    }
+    let want = whitted::trace::occluded_rays(&accel, &shadow, Engine::Scalar, false);
+    assert!(want.iter().any(|&o| o) && !want.iter().all(|&o| o));
+    for e in Engine::ALL {
+        let (got, chosen) = whitted::trace::occluded_rays_with(&accel, &shadow, e, false);
+        assert!(got == want, "{}", e.name());
+        assert!(chosen != Engine::Auto);
+    }
+}
