@@ -56,15 +56,6 @@ pub fn ge(a: F32x8, b: F32x8) -> M32x8 {
 pub fn eq(a: F32x8, b: F32x8) -> M32x8 {
     a.simd_eq(b)
 }
-/// [`crate::accel::safe_inv`] per lane: the same comparison, the same replacement and the
-/// same division, so the same floats (NaN stays NaN). One division for 8 lanes instead of 8:
-/// it was a quarter of `packet8`'s per-packet set-up on camera rays.
-#[inline(always)]
-pub fn safe_inv(v: F32x8) -> F32x8 {
-    let tiny = splat(crate::accel::SAFE_INV_TINY);
-    let signed = (v & splat(-0.0)) | tiny;
-    splat(1.0) / select(lt(v.abs(), tiny), signed, v)
-}
 /// `m ? a : b` per lane.
 #[inline(always)]
 pub fn select(m: M32x8, a: F32x8, b: F32x8) -> F32x8 {
@@ -322,7 +313,7 @@ mod tests {
         }
     }
 
-    /// `safe_inv` in lanes is `accel::safe_inv` bit for bit: zeros of both signs, the
+    /// `robust::safe_inv8` is `robust::safe_inv` lane by lane, bit for bit: zeros of both signs, the
     /// clamp's edges, subnormals, the largest values, infinities and NaN.
     #[test]
     fn lane_safe_inv_equals_safe_inv() {
@@ -343,7 +334,10 @@ mod tests {
         ]);
         for chunk in values.chunks(8) {
             let v: [f32; 8] = std::array::from_fn(|i| chunk.get(i).copied().unwrap_or(1.0));
-            for (g, v) in lanes(safe_inv(from_lanes(v))).iter().zip(v) {
+            for (g, v) in lanes(crate::accel::robust::safe_inv8(from_lanes(v)))
+                .iter()
+                .zip(v)
+            {
                 let want = crate::accel::safe_inv(v);
                 assert!(
                     g.to_bits() == want.to_bits() || (g.is_nan() && want.is_nan()),

@@ -1,11 +1,26 @@
 //! Acceleration: a BVH2 (whitted's binned SAH builder, or an obvhs preset) as compact nodes,
-//! the triangles in BVH order, and the 8-wide collapse of the tree.
+//! the triangles in BVH order, and the 8-wide collapse of the tree; the traversals of both.
+//!
+//! The traversals by tree and rays per call (every one returns `intersect1`'s hits bit for
+//! bit; `crate::engine` names the engines built on them):
+//!
+//! | tree | 1 ray | 8 rays | 16 rays (AVX-512) |
+//! |---|---|---|---|
+//! | BVH2 (`Accel::nodes`) | `scalar`: `intersect1` (the reference) | `packet`: `intersect8` | `packet16`: `intersect16` |
+//! | BVH8 (`Accel::wide`, `wide`) | `wide1`: `intersect_wide1`, `intersect_wide1_many` | `wide1`: `intersect_wide8` (lane by lane) | - |
+//! | BVH2, then BVH8 per lane | - | `hybrid8` (`packet`'s walk, `hand_off` the switch) | `packet16`: `intersect_hybrid16` |
+//!
+//! Each has its `occluded*` twin (any hit). Shared by all: the robustness constants and the
+//! closest-hit rule (`robust`), the SoA triangle columns (`tri_soa`), the builders
+//! (`build`, `wide`).
 
 pub mod build;
+mod hand_off;
 pub mod hybrid8;
 pub mod packet;
 pub mod packet16;
 pub mod pages;
+pub mod robust;
 pub mod scalar;
 pub mod tri_soa;
 pub mod wide;
@@ -14,6 +29,9 @@ pub mod wide1;
 pub use hybrid8::{intersect_hybrid8, occluded_hybrid8};
 pub use packet::{intersect8, occluded8};
 pub use packet16::{intersect_hybrid16, intersect16, occluded_hybrid16, occluded16};
+pub use robust::{
+    BARY_SAFE, BOX_PAD, ORIGIN_LAST, SAFE_INV_TINY, SLAB_FAR_SCALE, nearer, safe_inv,
+};
 pub use scalar::{intersect1, occluded1};
 pub use tri_soa::TriangleSoa;
 pub use wide::Bvh8;
@@ -201,43 +219,3 @@ fn tree_depth(nodes: &[Node]) -> usize {
     }
     max
 }
-
-/// Relative padding of node boxes (see `Accel::build`).
-pub const BOX_PAD: f32 = 4.0 * f32::EPSILON;
-
-/// Reciprocal direction for slab tests. A zero component becomes `±1e30` instead of `±inf`,
-/// so `(bound - origin) * inv` is never `0 * inf = NaN` for a ray starting on a slab plane.
-#[inline(always)]
-pub fn safe_inv(d: f32) -> f32 {
-    1.0 / if d.abs() < SAFE_INV_TINY {
-        SAFE_INV_TINY.copysign(d)
-    } else {
-        d
-    }
-}
-
-/// The smallest direction component magnitude [`safe_inv`] divides by (`simd::safe_inv` and
-/// the 16-lane set-up clamp the same way).
-pub const SAFE_INV_TINY: f32 = 1e-30;
-
-/// Any-hit walks (shadow rays) visit a child box the ray starts in after one it does not.
-/// A shadow ray starts on a surface, so the boxes around its origin hold the triangles it
-/// leaves without hitting, and what blocks it lies farther on; near-first tested that
-/// neighbourhood before reaching the occluder. Where both boxes hold the origin, the one the
-/// ray leaves later goes first (it reaches farther); where neither does, the nearer (a
-/// blocker close to the surface, as under a body's own limbs, is found early). A packet
-/// takes the side most of its lanes prefer. `wide1`'s any-hit walk keeps only the two
-/// groups (the children the ray starts in after the others, each group in slot order, no
-/// distances: see `wide1::walk_any`). An
-/// unoccluded ray visits every box it meets in any order, and any order finds an occluder
-/// when there is one, so answers do not change.
-/// Measured (README, "Engines", instructions of `occluded8`): bench shadow rays 0.85x,
-/// `refraction`'s shadow rays (from inside the glass kitten) 0.73x, `phong`'s 1.04x; visiting
-/// every farther child first measured 0.80x / 0.62x / 1.24x, so the floor scenes rendered
-/// slower with it.
-pub const ORIGIN_LAST: bool = true;
-
-/// Slab tests round; widen the far distance by `1 + 2 gamma(3)` (pbrt's bound) so a box is
-/// never missed by a ray that hits a triangle on its boundary.
-pub const SLAB_FAR_SCALE: f32 =
-    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);

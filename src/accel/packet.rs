@@ -4,8 +4,9 @@
 //! same arithmetic per lane (so each lane equals the scalar result bit for bit), plus an
 //! `active` mask: inactive and padding lanes never produce hits.
 
-use super::hybrid8::hand_off;
-use super::scalar::{BARY_SAFE, inside_f64};
+use super::hand_off::hand_off;
+use super::robust::{BARY_SAFE, nearer8, safe_inv8};
+use super::scalar::inside_f64;
 use super::tri_soa::Leaf;
 use super::wide::{LEAF_BIT, NO_ENTRY, TriBlock8, leaf_blocks};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
@@ -202,7 +203,7 @@ pub(super) fn hit_box8_octant(
 /// parent's, and the slab test rounds monotonically, so no other lane can meet anything
 /// below); leaves test only those. With `SWITCH > 0` (hybrid), a node reached by at most
 /// `SWITCH` lanes that has a twin in the wide tree is handed to single-ray traversal lane by
-/// lane (`hybrid8::hand_off`); `SWITCH = 0` is the plain packet engine.
+/// lane (`hand_off::hand_off`); `SWITCH = 0` is the plain packet engine.
 #[inline(always)]
 pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
     accel: &Accel,
@@ -216,11 +217,7 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
         return (hits, occluded);
     }
     let d = rays.d;
-    let inv = Vec3x8::new(
-        simd::safe_inv(d.x),
-        simd::safe_inv(d.y),
-        simd::safe_inv(d.z),
-    );
+    let inv = Vec3x8::new(safe_inv8(d.x), safe_inv8(d.y), safe_inv8(d.z));
     let mut tfar = rays.tfar;
     let dlen = simd::sqrt(rays.d.dot(rays.d));
     // entries: a node and the bits of the lanes that met its box when it was pushed.
@@ -299,7 +296,7 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
                         // record hit: as in intersect1, the new limit is the next float above
                         // t and an exact tie keeps the lower original triangle index.
                         let id = U32x8::splat(accel.tris.prim[slot]);
-                        let better = simd::lt(t, hits.t) | simd::lt_u32(id, hits.tri);
+                        let better = nearer8(t, id, hits.t, hits.tri);
                         let take = mask & better;
                         hits.tri = simd::select_u32(take, id, hits.tri);
                         hits.t = simd::select(take, t, hits.t);

@@ -16,7 +16,8 @@
 
 use super::hybrid8::{intersect_hybrid8, occluded_hybrid8};
 use super::packet::{intersect8, occluded8};
-use super::scalar::{BARY_SAFE, Stack, inside_f64};
+use super::robust::{BARY_SAFE, nearer};
+use super::scalar::{Stack, inside_f64};
 use super::tri_soa::Leaf;
 use super::wide::NO_ENTRY;
 use super::wide1::{RayWide, STACK, grow_stack, walk};
@@ -447,6 +448,17 @@ macro_rules! hit_triangle16 {
     };
 }
 
+/// [`nearer`] in 16 lanes: the lanes whose hit (`t`, `tri`) replaces the best so far. A
+/// macro, as the other 16-lane steps, so that it inlines into the AVX-512 walks.
+macro_rules! nearer16 {
+    ($t:expr, $tri:expr, $than_t:expr, $than_tri:expr) => {{
+        let (t, than_t) = ($t, $than_t);
+        _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, than_t)
+            | (_mm512_cmp_ps_mask::<_CMP_EQ_OQ>(t, than_t)
+                & _mm512_cmplt_epu32_mask($tri, $than_tri))
+    }};
+}
+
 /// Record hits in the lanes of `take` (already the lanes whose hit is nearer, or as near with
 /// a lower triangle index): triangle `id`, `(t, b1, b2)`, and the new `limit`, the next
 /// float above `t` (as in `intersect1`). A macro over the walk's hit vectors, like
@@ -464,12 +476,12 @@ macro_rules! take_hits16 {
 }
 
 /// Record lane `i`'s hit `h` from a single-ray walk, found below the lane's limit: so nearer,
-/// or as near with a lower index (as `hybrid8::HitLanes::take`).
+/// or as near with a lower index (as `hand_off::HitLanes::take`).
 macro_rules! take_lane16 {
     ($i:expr, $h:expr; $tri:ident, $t_hit:ident, $b1_hit:ident, $b2_hit:ident, $tfar:ident) => {{
         let (i, h): (usize, Hit) = ($i, $h);
         let (old_tri, old_t) = (bytemuck::cast::<_, [u32; 16]>($tri)[i], lanes16($t_hit)[i]);
-        if old_tri == Hit::NONE_ID || h.t < old_t || h.tri < old_tri {
+        if old_tri == Hit::NONE_ID || nearer(h.t, h.tri, old_t, old_tri) {
             take_hits16!(1u16 << i, _mm512_set1_epi32(h.tri as i32), splat(h.t), splat(h.b1),
                 splat(h.b2), splat(h.t.next_up()); $tri, $t_hit, $b1_hit, $b2_hit, $tfar);
         }
@@ -528,8 +540,7 @@ fn traverse16<const ANY_HIT: bool, const SWITCH: u32>(
                     // record hit: as in intersect1, the new limit is the next float above t and
                     // an exact tie keeps the lower original triangle index.
                     let id = _mm512_set1_epi32(accel.tris.prim[leaf.slot(j)] as i32);
-                    let better = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, t_hit)
-                        | _mm512_cmplt_epu32_mask(id, tri);
+                    let better = nearer16!(t, id, t_hit, tri);
                     take_hits16!(mask & better, id, t, b1, b2, next_up(t); tri, t_hit, b1_hit, b2_hit, tfar);
                 }
             }};

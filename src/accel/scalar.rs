@@ -5,7 +5,8 @@
 //! bit. `literal_hit` is the contract of SCENES.md §2 written out in f64, the yardstick the
 //! fast forms are held to.
 
-use super::{Accel, SLAB_FAR_SCALE, safe_inv};
+use super::Accel;
+use super::robust::{BARY_SAFE, SLAB_FAR_SCALE, nearer, safe_inv};
 use crate::ray::{Hit, Ray};
 
 #[inline(always)]
@@ -90,10 +91,6 @@ pub fn hit_triangle1(
     }
     inside_f64(accel, i, o, d).then_some((t, b1, b2))
 }
-
-/// Barycentrics this close to 0 (or closer) are decided by [`inside_f64`]. The f32 areas
-/// carry noise of about `ulp(|q|) / height`, far below this for any sane mesh.
-pub const BARY_SAFE: f32 = 1e-3;
 
 /// Whether the ray passes through the triangle, from the signs of the three edge functions
 /// `<d, cross(vi - o, vj - o)>` (each the signed sub-triangle area times `<d, n>`) in f64.
@@ -216,7 +213,7 @@ fn traverse1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Optio
                     // so an exact tie reaches here and keeps the lower original index; the
                     // result does not depend on the visiting order (BVH == brute force exactly).
                     let tri = accel.tris.prim[slot];
-                    if best.is_none_or(|b| t < b.t || tri < b.tri) {
+                    if best.is_none_or(|b| nearer(t, tri, b.t, b.tri)) {
                         best = Some(Hit { tri, t, b1, b2 });
                         tfar = t.next_up();
                     }
@@ -281,7 +278,7 @@ pub fn intersect_brute1(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
     for slot in 0..accel.tris.len() {
         if let Some((t, b1, b2)) = hit_triangle1(accel, slot, &r1, ray.tnear, tfar, cull) {
             let tri = accel.tris.prim[slot];
-            if best.is_none_or(|b| t < b.t || tri < b.tri) {
+            if best.is_none_or(|b| nearer(t, tri, b.t, b.tri)) {
                 best = Some(Hit { tri, t, b1, b2 });
                 tfar = t.next_up();
             }

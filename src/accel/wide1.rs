@@ -6,7 +6,8 @@
 //! return: the per-triangle arithmetic is the same, the boxes are the same padded boxes, and
 //! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
 
-use super::scalar::{BARY_SAFE, inside_f64};
+use super::robust::{BARY_SAFE, nearer};
+use super::scalar::inside_f64;
 use super::wide::{Bvh8, LEAF_BIT, TriBlock8, leaf_blocks};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
@@ -142,7 +143,7 @@ pub fn hit_block1<const ANY_HIT: bool>(
         let lane = bits.trailing_zeros() as usize;
         bits &= bits - 1;
         let tri = b.prim[lane];
-        if best.is_none_or(|h| t[lane] < h.t || (t[lane] == h.t && tri < h.tri)) {
+        if best.is_none_or(|h| nearer(t[lane], tri, h.t, h.tri)) {
             best = Some(Hit {
                 tri,
                 t: t[lane],
@@ -288,7 +289,7 @@ fn walk_closest(
                 if let Some(h) = hit_block1::<false>(accel, block, r, tfar, cull) {
                     // record hit: as in intersect1, the new limit is the next float above
                     // t and an exact tie keeps the lower original triangle index.
-                    if best.is_none_or(|b| h.t < b.t || h.tri < b.tri) {
+                    if best.is_none_or(|b| nearer(h.t, h.tri, b.t, b.tri)) {
                         best = Some(h);
                         tfar = h.t.next_up();
                     }
