@@ -844,7 +844,7 @@ fn caps_are_checked_before_generating_shapes() {
     assert!(text.len() > 100_000);
     let e = scene_err(&text);
     assert!(
-        e.starts_with("fuzz.toml: mesh[3720]: the scene's meshes add up to over 33554432"),
+        e.starts_with("fuzz.toml:11185: mesh[3720]: the scene's meshes add up to over 33554432"),
         "{e}"
     );
     // The subdivision budget, too: 2^20 triangles made by subdividing, from the parameters.
