@@ -281,7 +281,8 @@ pub struct LightDesc {
 pub struct MaterialDesc {
     /// The name meshes refer to it by (unique).
     pub name: String,
-    /// Exactly one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`.
+    /// At most one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`
+    /// (none: `color = [0.8, 0.8, 0.8]`, [`DEFAULT_COLOR`]).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -1284,7 +1285,7 @@ pub const DEFAULT_MATERIAL: &str = "default";
 pub fn default_material(vertex_colors: bool) -> MaterialDesc {
     MaterialDesc {
         name: DEFAULT_MATERIAL.into(),
-        color: (!vertex_colors).then_some([0.8; 3]),
+        color: (!vertex_colors).then_some([DEFAULT_COLOR; 3]),
         vertex_color: vertex_colors,
         texture: None,
         checker: None,
@@ -1299,6 +1300,9 @@ pub fn default_material(vertex_colors: bool) -> MaterialDesc {
         lamp: true,
     }
 }
+
+/// `Od` of a material that names no colour source (and of [`default_material`]).
+pub const DEFAULT_COLOR: f32 = 0.8;
 
 /// Validate one material description and load its texture (one load per file).
 fn build_material(
@@ -1315,7 +1319,7 @@ fn build_material(
         + m.vertex_color as u32
         + m.texture.is_some() as u32
         + m.checker.is_some() as u32;
-    if sources != 1 {
+    if sources > 1 {
         return Err(Error::scene(
             path,
             format!(
@@ -1324,10 +1328,11 @@ fn build_material(
             ),
         ));
     }
-    let color = m
-        .color
-        .map(|c| nonneg3(c, &key("color"), path))
-        .transpose()?;
+    // No source at all: the default material's grey.
+    let color = match (m.color, sources) {
+        (None, 0) => Some(Vec3::splat(DEFAULT_COLOR)),
+        (c, _) => c.map(|c| nonneg3(c, &key("color"), path)).transpose()?,
+    };
     let albedo = if m.vertex_color {
         Albedo::VertexColor
     } else if let Some(col) = color {
