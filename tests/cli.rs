@@ -812,3 +812,36 @@ fn info_counts_open_edges_by_position() {
     let text = succeeds(&["info", tri.to_str().unwrap()]);
     assert!(text.contains("open_edges: 3\n"), "{text}");
 }
+
+/// `kr` follows `ks` when `ks` is given, in the file or by `-D`, and is 0 when neither `ks`
+/// nor `kr` is given.
+#[test]
+fn kr_follows_ks_when_ks_is_given() {
+    let p = tmp("kr.toml");
+    std::fs::write(
+        &p,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[material]]\nname = \"a\"\n\
+         [[material]]\nname = \"b\"\nks = 0.5\n[[mesh]]\nshape = \"cube\"\nmaterial = \"a\"\n",
+    )
+    .unwrap();
+    let ps = p.to_str().unwrap();
+    let kr = |toml: &str, name: &str| {
+        let m = toml
+            .split("[[material]]")
+            .find(|m| m.contains(&format!("name = \"{name}\"")))
+            .unwrap()
+            .to_string();
+        m.lines()
+            .find(|l| l.starts_with("kr = "))
+            .map(|l| l.to_string())
+    };
+    let toml = succeeds(&["scene", ps]);
+    assert_eq!(kr(&toml, "a").as_deref(), Some("kr = 0.0"), "{toml}");
+    assert_eq!(kr(&toml, "b"), None, "b's kr is its ks: {toml}");
+    let toml = succeeds(&["scene", ps, "-D", "material[0].ks=0.7"]);
+    assert_eq!(
+        kr(&toml, "a"),
+        None,
+        "a's kr follows the ks set by -D: {toml}"
+    );
+}

@@ -675,6 +675,7 @@ impl SceneFile {
         for def in defs {
             let fail = |m: String| Error::Usage(format!("-D '{def}': {m}"));
             apply_override(&mut root, def).map_err(fail)?;
+            self.follow_ks(&mut root, def);
             fill_material_defaults(&mut root);
             // Check each override at once, so the error names the one that broke the scene.
             match SceneFile::deserialize(root.clone()) {
@@ -692,6 +693,35 @@ impl SceneFile {
         // Errors about the files the scene names still point at the lines of its text.
         file.lines = self.lines.clone();
         Ok(file)
+    }
+}
+
+impl SceneFile {
+    /// `-D material[i].ks=..` on a material whose file gave neither `ks` nor `kr` (so `kr`
+    /// was set to 0 when it was read): `ks` is given now, so `kr` follows it, as in a file.
+    fn follow_ks(&self, root: &mut toml::Value, def: &str) {
+        let key = def.split_once('=').map_or(def, |(k, _)| k).trim();
+        let Some(i) = key
+            .strip_prefix("material[")
+            .and_then(|r| r.strip_suffix("].ks"))
+            .and_then(|i| i.parse::<usize>().ok())
+        else {
+            return;
+        };
+        let given = |k: &str| self.lines.line(&format!("material[{i}].{k}")).is_some();
+        let filled = self
+            .materials
+            .get(i)
+            .is_some_and(|m| m.kr == Some(Coef::Scalar(0.0)))
+            && !self.lines.0.is_empty()
+            && !given("ks")
+            && !given("kr");
+        if filled
+            && let Some(toml::Value::Array(items)) = root.get_mut("material")
+            && let Some(toml::Value::Table(t)) = items.get_mut(i)
+        {
+            t.remove("kr");
+        }
     }
 }
 
