@@ -164,7 +164,9 @@ struct RenderArgs {
     #[arg(long)]
     stats: bool,
     /// Override a scene value by its TOML path, e.g. `-D camera.vfov=30`,
-    /// `-D 'light[0].intensity=[1,1,1]'`, `-D render.depth=4` (repeatable, applied in order).
+    /// `-D 'light[0].intensity=[1,1,1]'`, `-D 'light[+]={position=[0,5,5], intensity=[1,1,1]}'`
+    /// (appends a light), `-D background.cubemap=textures/cubemap` (replaces the colour);
+    /// repeatable, applied in order.
     #[arg(short = 'D', value_name = "KEY=VALUE")]
     define: Vec<String>,
     /// Extra first-hit layers in the EXR beside the beauty image: any of albedo, normal,

@@ -1732,6 +1732,59 @@ faces = [[0, 1, 2]]
     }
 
     #[test]
+    fn overrides_replace_alternatives_and_append_entries() {
+        let f = SceneFile::parse(MINIMAL, Path::new("s.toml")).unwrap();
+        let d = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let g = f.with_overrides(&d(&["background.cubemap=sky"])).unwrap();
+        assert_eq!(g.background.color, None);
+        assert_eq!(g.background.cubemap.as_deref(), Some("sky"));
+        let g = f
+            .with_overrides(&d(&[
+                "light[+]={position=[0, 1, 0], intensity=[1, 1, 1]}",
+                "light[1].position=[1, 1, 1]",
+                "light[1].intensity=[0.5, 0.5, 0.5]",
+                "material[0].texture=t.png",
+            ]))
+            .unwrap();
+        assert_eq!(g.lights.len(), 2);
+        assert_eq!(g.lights[1].intensity, [0.5; 3]);
+        assert_eq!(g.materials[0].color, None);
+        let e = f
+            .with_overrides(&d(&["light[0].position=[1, 1, 1]"]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("-D 'light[0].position=[1, 1, 1]': missing field `intensity`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn validation_errors_carry_the_key_line_and_defaults_fill_the_rest() {
+        let e = build(&MINIMAL.replace("vfov = 40", "vfov = 400"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("s.toml:8: camera.vfov"), "{e}");
+        // Only the camera's eye and look_at are required.
+        let s = build(
+            "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[material]]\nname = \"m\"\n\
+             [[mesh]]\nmaterial = \"m\"\nshape = \"cube\"\n",
+        )
+        .unwrap();
+        assert_eq!(
+            (s.width, s.height, s.view.vfov, s.depth),
+            (1024, 768, 36.0, 1)
+        );
+        let m = &s.materials[0];
+        assert_eq!(
+            (m.ka, m.kd, m.ks, m.n),
+            (Vec3::splat(0.3), Vec3::splat(0.7), Vec3::splat(0.1), 40.0)
+        );
+        assert_eq!(m.kr, Vec3::ZERO);
+        assert!(matches!(m.albedo, Albedo::Color(c) if c == Vec3::splat(DEFAULT_COLOR)));
+    }
+
+    #[test]
     fn key_lines_point_at_keys() {
         let text = "a = 1\n[image]\nwidth = 4\n[background]\ncubemap = \"sky\"\n[[mesh]]\n\
             file = \"a.m\"\n[[mesh]]\n\nfile = \"b.m\"\n";
