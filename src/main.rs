@@ -313,8 +313,9 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--crop -0.1,1,0,1` as `--crop=-0.1,1,0,1`: a comma list that starts with a minus sign is
-/// the option's value (so its range error is ours), not an unknown flag.
+/// `--crop 0,0.5,0,1` as `--crop=0,0.5,0,1`: a comma list is the option's whole value, so the
+/// scene after it stays the scene (the space-separated `--crop 0 0.5 0 1` takes four words),
+/// and a list starting with a minus sign gets whitted's range error, not clap's.
 fn attach_hyphen_values(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
     let mut out: Vec<std::ffi::OsString> = Vec::new();
     for a in args {
@@ -325,7 +326,7 @@ fn attach_hyphen_values(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<s
             )
         });
         match a.to_str() {
-            Some(v) if takes_list && v.starts_with('-') && v.contains(',') => {
+            Some(v) if takes_list && v.contains(',') => {
                 let flag = out.pop().expect("the flag");
                 out.push(format!("{}={v}", flag.to_string_lossy()).into());
             }

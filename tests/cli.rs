@@ -749,7 +749,20 @@ fn pbrt_spellings_are_aliases() {
     args.extend(size);
     succeeds(&args);
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&c).unwrap());
-    succeeds(&["trace-rays", "--help"]).contains("nthreads");
+    // A comma list is the whole value: the scene after it stays the scene.
+    let d = tmp("crop-d.png");
+    let mut args = vec![
+        "render",
+        "--crop",
+        "0,0.5,0,0.5",
+        "phong",
+        "-o",
+        d.to_str().unwrap(),
+    ];
+    args.extend(size);
+    succeeds(&args);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&d).unwrap());
+    assert!(succeeds(&["trace-rays", "--help"]).contains("nthreads"));
     fails_with(
         &["render", "phong", "--crop", "-0.5,0.5,0,1", "-q"],
         &["--crop -0.5,0.5,0,1: four fractions in [0, 1]"],
