@@ -52,7 +52,7 @@ impl Info {
     }
 }
 
-/// Inspect `path`: a folder is a cube map, `.m` / `.obj` a mesh, `.toml` a scene, anything
+/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` a mesh, `.toml` a scene, anything
 /// else an image. Errors are the loaders' one-line errors.
 pub fn info(path: &Path) -> Result<Info> {
     if path.is_dir() {
@@ -183,16 +183,50 @@ pub fn mesh_fields(mesh: &Mesh, format: &str, file_normals: bool) -> Info {
             ("attributes", json!(attributes)),
             ("bounds", bounds),
             ("degenerate_triangles", json!(mesh.degenerate_count())),
-            ("open_edges", json!(mesh.open_edges())),
+            ("open_edges", json!(open_edges_by_position(mesh))),
         ],
         warnings: Vec::new(),
     }
 }
 
+/// Edges used by exactly one triangle, with vertices at the same position counted as one:
+/// formats that split vertices at uv or normal seams (OBJ, PLY) leave a closed surface
+/// closed. Positions are compared bit for bit (`-0.0` as `0.0`).
+pub fn open_edges_by_position(mesh: &Mesh) -> usize {
+    use std::collections::HashMap;
+    let mut ids = HashMap::<[u32; 3], u32>::with_capacity(mesh.positions.len());
+    let welded: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let key = p.to_array().map(|c| (c + 0.0).to_bits());
+            let next = ids.len() as u32;
+            *ids.entry(key).or_insert(next)
+        })
+        .collect();
+    let mut edges = HashMap::<(u32, u32), u32>::new();
+    for tri in &mesh.triangles {
+        let t = tri.map(|i| welded.get(i as usize).copied().unwrap_or(i));
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a != b {
+                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+    }
+    edges.values().filter(|&&c| c == 1).count()
+}
+
 fn scene_info(path: &Path) -> Result<Info> {
     let file = SceneFile::load(path)?;
-    let search = SearchPath::for_scene(path.parent());
-    let (scene, warnings) = build_scene(&file, path, &search)?;
+    scene_file_info(&file, path, path.parent())
+}
+
+/// What a scene holds after validation: `file` as read (or built in, or with `-D`
+/// overrides), `path` its name in messages, `dir` the folder its relative paths start from.
+pub fn scene_file_info(file: &SceneFile, path: &Path, dir: Option<&Path>) -> Result<Info> {
+    let search = SearchPath::for_scene(dir);
+    let (scene, warnings) = build_scene(file, path, &search)?;
     let background = match &scene.background {
         Background::Color(c) => json!({"color": c.to_array().map(short)}),
         Background::CubeMap(cube) => {
@@ -252,10 +286,39 @@ pub fn run(path: &Path, as_json: bool) -> Result<String> {
     })
 }
 
-/// [`run`], printed to stdout (a closed pipe is not an error worth a panic).
-pub fn print(path: &Path, as_json: bool) -> Result<()> {
+/// `whitted info ARG [-D key=value]...`: a built-in scene name (`phong`), or a file as for
+/// [`run`]; `-D` overrides apply to scenes (built-in or `.toml`) only.
+pub fn run_arg(arg: &str, defines: &[String], as_json: bool) -> Result<String> {
+    let path = Path::new(arg);
+    let builtin = crate::scenes::builtin(arg);
+    if builtin.is_none() && defines.is_empty() {
+        return run(path, as_json);
+    }
+    let (file, name, dir) = match builtin {
+        Some(s) => (s, format!("<built-in scene {arg}>"), None),
+        None if crate::io::extension(path) == "toml" => {
+            (SceneFile::load(path)?, arg.to_string(), path.parent())
+        }
+        None => {
+            return Err(Error::Usage(format!(
+                "-D applies to scenes (a built-in name or a .toml file), not to '{arg}'"
+            )));
+        }
+    };
+    let file = file.with_overrides(defines)?;
+    let info = scene_file_info(&file, Path::new(&name), dir)
+        .map_err(|e| crate::io::scene_file::name_overrides(e, defines))?;
+    Ok(if as_json {
+        info.to_json() + "\n"
+    } else {
+        info.to_text()
+    })
+}
+
+/// [`run_arg`], printed to stdout (a closed pipe is not an error worth a panic).
+pub fn print(arg: &str, defines: &[String], as_json: bool) -> Result<()> {
     use std::io::Write;
-    let text = run(path, as_json)?;
+    let text = run_arg(arg, defines, as_json)?;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
     Ok(())
 }

@@ -25,17 +25,28 @@ enum Command {
     /// Render a built-in scene (phong, vertex_color, texture, cubemap, refraction, demo) or a
     /// scene file; with no scene, the demo (needs no files).
     Render(RenderArgs),
-    /// Print a built-in scene, or the scene `render` gives a mesh file, as editable TOML.
+    /// Print a scene as editable TOML: a built-in scene, a .toml file (with `-D` applied), or
+    /// the scene `render` gives a mesh file.
     Scene {
-        /// phong, vertex_color, texture, cubemap, refraction, demo, or a .obj/.ply/.m file.
+        /// phong, vertex_color, texture, cubemap, refraction, demo, a .toml scene file, or a
+        /// .m, .obj or .ply mesh.
         name: String,
+        /// Override a scene value by its TOML path before printing (as for `render`).
+        #[arg(short = 'D', value_name = "KEY=VALUE")]
+        define: Vec<String>,
     },
-    /// Describe a mesh, scene, image or cube-map folder after validating it.
+    /// Describe a built-in scene, a scene file, a mesh, an image or a cube-map folder after
+    /// validating it.
     Info {
-        file: PathBuf,
+        /// A built-in scene name, a .toml scene, a .m, .obj or .ply mesh, an image, or a
+        /// cube-map folder.
+        file: String,
         /// Print one JSON object instead of `key: value` lines.
         #[arg(long)]
         json: bool,
+        /// Override a scene value by its TOML path before validating (scenes only).
+        #[arg(short = 'D', value_name = "KEY=VALUE")]
+        define: Vec<String>,
     },
     /// Trace a binary ray file against a mesh and write the closest hits (see the README).
     TraceRays(TraceArgs),
@@ -43,6 +54,10 @@ enum Command {
     /// checking they cover it exactly.
     Merge(MergeArgs),
     /// Intersection throughput on the Embree peer's workloads, beside rt-bench when found.
+    #[command(mut_arg("meshes", |a| a.help(
+        "Meshes (.m, .obj or .ply); default meshes/kitten.m from the current folder, the \
+         WHITTED_ASSETS folders or the copy whitted ships"
+    )))]
     Bench(whitted::bench::Options),
 }
 
@@ -84,7 +99,7 @@ fn cmd_merge(args: MergeArgs) -> Result<()> {
 
 #[derive(clap::Args)]
 struct TraceArgs {
-    /// A `.m` or `.obj` mesh.
+    /// The mesh: .m, .obj or .ply.
     mesh: PathBuf,
     /// Input rays: little-endian f32 `ox oy oz dx dy dz tnear tfar`, 32 bytes each.
     #[arg(long)]
@@ -105,7 +120,8 @@ struct TraceArgs {
     /// Midpoint subdivision levels (each x4 triangles; face order: 4 children per face).
     #[arg(long, default_value_t = 0)]
     subdivide: u32,
-    #[arg(long, short = 't')]
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 't', visible_alias = "nthreads")]
     threads: Option<usize>,
 }
 
@@ -117,18 +133,20 @@ struct RenderArgs {
     /// Render one stage of the assignment: intersection, diffuse, specular, shadow, reflection.
     #[arg(long)]
     stage: Option<String>,
-    #[arg(long)]
-    width: Option<u64>,
-    #[arg(long)]
-    height: Option<u64>,
+    /// Image width in pixels (overrides the scene's `[image] width`; default 1024).
+    #[arg(long, allow_negative_numbers = true)]
+    width: Option<i64>,
+    /// Image height in pixels (overrides the scene's `[image] height`; default 768).
+    #[arg(long, allow_negative_numbers = true)]
+    height: Option<i64>,
     /// Recursion depth for reflection and refraction (overrides the scene and stage).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     depth: Option<u32>,
-    /// Samples per pixel (stratified, deterministic).
-    #[arg(long, default_value_t = 1)]
-    spp: u32,
+    /// Samples per pixel, 1 to 4096 (stratified, deterministic).
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    spp: i64,
     /// Worker threads (default: all cores).
-    #[arg(long, short = 't')]
+    #[arg(long, short = 't', visible_alias = "nthreads")]
     threads: Option<usize>,
     /// Output image, `.png` (sRGB 8-bit) or `.exr` (linear float). Default: SCENE.png.
     #[arg(long, short = 'o')]
@@ -148,25 +166,39 @@ struct RenderArgs {
     #[arg(long)]
     stats: bool,
     /// Override a scene value by its TOML path, e.g. `-D camera.vfov=30`,
-    /// `-D 'light[0].intensity=[1,1,1]'`, `-D render.depth=4` (repeatable, applied in order).
+    /// `-D 'light[0].intensity=[1,1,1]'`, `-D 'light[+]={position=[0,5,5], intensity=[1,1,1]}'`
+    /// (appends a light), `-D background.cubemap=textures/cubemap` (replaces the colour);
+    /// repeatable, applied in order.
     #[arg(short = 'D', value_name = "KEY=VALUE")]
     define: Vec<String>,
     /// Extra first-hit layers in the EXR beside the beauty image: any of albedo, normal,
     /// depth, id (comma-separated; needs `-o file.exr`).
     #[arg(long, value_name = "LIST")]
     aov: Option<String>,
-    /// Render only a crop window, as fractions of the image: x0,x1,y0,y1 (pbrt's
-    /// --cropwindow; pixels ceil(width x0)..ceil(width x1), the same in y).
+    /// Render only a crop window, as fractions of the image: x0,x1,y0,y1 or x0 x1 y0 y1
+    /// (pbrt's --cropwindow; pixels ceil(width x0)..ceil(width x1), the same in y).
     #[arg(
         long,
+        visible_alias = "cropwindow",
         value_name = "X0,X1,Y0,Y1",
         group = "part",
-        allow_hyphen_values = true
+        num_args = 1..=4,
+        value_delimiter = ',',
+        allow_negative_numbers = true
     )]
-    crop: Option<String>,
-    /// Render only these pixels: x0,x1,y0,y1, exclusive ends.
-    #[arg(long, value_name = "X0,X1,Y0,Y1", group = "part")]
-    pixel_bounds: Option<String>,
+    crop: Option<Vec<String>>,
+    /// Render only these pixels: x0,x1,y0,y1 or x0 x1 y0 y1, exclusive ends (pbrt's
+    /// --pixelbounds).
+    #[arg(
+        long,
+        visible_alias = "pixelbounds",
+        value_name = "X0,X1,Y0,Y1",
+        group = "part",
+        num_args = 1..=4,
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pixel_bounds: Option<Vec<String>>,
     /// Render the I-th (0-based) of N bands of rows, split on the 16-pixel tile grid the same
     /// way for every I (for array jobs; `whitted merge` joins the parts).
     #[arg(long, value_name = "I/N", group = "part")]
@@ -184,8 +216,8 @@ impl RenderArgs {
     fn part(&self) -> Result<whitted::render::part::Part> {
         use whitted::render::part::Part;
         let part = match (&self.crop, &self.pixel_bounds, &self.tile) {
-            (Some(c), _, _) => Part::parse_crop(c),
-            (_, Some(p), _) => Part::parse_pixel_bounds(p),
+            (Some(c), _, _) => Part::parse_crop(&c.join(",")),
+            (_, Some(p), _) => Part::parse_pixel_bounds(&p.join(",")),
             (_, _, Some(t)) => Part::parse_tile(t),
             _ => Ok(Part::Full),
         };
@@ -290,12 +322,35 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--crop 0,0.5,0,1` as `--crop=0,0.5,0,1`: a comma list is the option's whole value, so the
+/// scene after it stays the scene (the space-separated `--crop 0 0.5 0 1` takes four words),
+/// and a list starting with a minus sign gets whitted's range error, not clap's.
+fn attach_hyphen_values(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    for a in args {
+        let takes_list = out.last().and_then(|o| o.to_str()).is_some_and(|o| {
+            matches!(
+                o,
+                "--crop" | "--cropwindow" | "--pixel-bounds" | "--pixelbounds"
+            )
+        });
+        match a.to_str() {
+            Some(v) if takes_list && v.contains(',') => {
+                let flag = out.pop().expect("the flag");
+                out.push(format!("{}={v}", flag.to_string_lossy()).into());
+            }
+            _ => out.push(a),
+        }
+    }
+    out
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(attach_hyphen_values(std::env::args_os()));
     let result = match cli.command {
         Command::Render(args) => cmd_render(args),
-        Command::Scene { name } => cmd_scene(&name),
-        Command::Info { file, json } => whitted::info::print(&file, json),
+        Command::Scene { name, define } => cmd_scene(&name, &define),
+        Command::Info { file, json, define } => whitted::info::print(&file, &define, json),
         Command::TraceRays(args) => cmd_trace_rays(args),
         Command::Merge(args) => cmd_merge(args),
         Command::Bench(opts) => whitted::bench::run(&opts),
@@ -327,24 +382,26 @@ fn load_scene_file(arg: &str) -> Result<(SceneFile, PathBuf, Option<PathBuf>)> {
     Ok((file, path, dir))
 }
 
-fn cmd_scene(name: &str) -> Result<()> {
+fn cmd_scene(name: &str, define: &[String]) -> Result<()> {
     if whitted::io::mesh_scene::is_mesh_file(Path::new(name)) {
         let (s, warnings) = whitted::io::mesh_scene::scene_for_mesh(Path::new(name), 1024, 768)?;
         for w in warnings {
             eprintln!("warning: {w}");
         }
+        let s = s.with_overrides(define)?;
+        let materials = if s.materials.is_empty() {
+            "Materials: none in the file, so whitted's default material."
+        } else {
+            "Materials: the file's, mapped from MTL."
+        };
         print!(
-            "# whitted scene for the mesh '{name}': `whitted render {name}` renders this.\n# Lights: the canonical ones scaled to the model, or none when its materials emit\n# (emitters light the scene themselves). Materials: the file's, mapped from MTL.\n{}",
+            "# whitted scene for the mesh '{name}': `whitted render {name}` renders this.\n# Lights: the canonical ones scaled to the model, or none when its materials emit\n# (emitters light the scene themselves). {materials}\n{}",
             s.to_toml()
         );
         return Ok(());
     }
-    let s = scenes::builtin(name).ok_or_else(|| {
-        Error::Usage(format!(
-            "no built-in scene '{name}' (try {})",
-            scenes::NAMES.join(", ")
-        ))
-    })?;
+    let (s, _, _) = load_scene_file(name)?;
+    let s = s.with_overrides(define)?;
     print!(
         "# whitted scene '{name}'. Relative paths resolve against this file's folder, the\n# current folder, the folders of WHITTED_ASSETS, then whitted's own data folder.\n{}",
         s.to_toml()
@@ -354,23 +411,39 @@ fn cmd_scene(name: &str) -> Result<()> {
 
 fn cmd_render(args: RenderArgs) -> Result<()> {
     let name = args.scene.clone().unwrap_or_else(|| "demo".into());
+    let size_arg = |flag: &str, v: Option<i64>| match v {
+        Some(n) if n <= 0 => Err(Error::Usage(format!(
+            "{flag} {n}: the image size must be > 0 pixels"
+        ))),
+        v => Ok(v.map(|n| n as u64)),
+    };
+    let (width, height) = (
+        size_arg("--width", args.width)?,
+        size_arg("--height", args.height)?,
+    );
     let (file, path, dir) = if whitted::io::mesh_scene::is_mesh_file(Path::new(&name)) {
         // A mesh alone: framed for the requested size; build_scene reports the warnings.
-        let size = (args.width.unwrap_or(1024), args.height.unwrap_or(768));
-        check_size(size.0, size.1).map_err(Error::Usage)?;
+        let size = (width.unwrap_or(1024), height.unwrap_or(768));
+        check_size(size.0, size.1).map_err(|m| Error::Usage(format!("--width/--height: {m}")))?;
         let (file, _) = whitted::io::mesh_scene::scene_for_mesh(Path::new(&name), size.0, size.1)?;
         (file, PathBuf::from(&name), None)
     } else {
         load_scene_file(&name)?
     };
     let mut file = file.with_overrides(&args.define)?;
-    if let Some(w) = args.width {
+    if let Some(w) = width {
         file.image.width = w;
     }
-    if let Some(h) = args.height {
+    if let Some(h) = height {
         file.image.height = h;
     }
-    let (w, h) = check_size(file.image.width, file.image.height).map_err(Error::Usage)?;
+    let (w, h) = if args.width.is_some() || args.height.is_some() {
+        check_size(file.image.width, file.image.height)
+            .map_err(|m| Error::Usage(format!("--width/--height: {m}")))?
+    } else {
+        file.image_size(&path)
+            .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?
+    };
     let stage = match &args.stage {
         None => None,
         Some(s) => Some(Stage::from_name(s).ok_or_else(|| {
@@ -386,9 +459,13 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             "--depth {d} is over the cap of {MAX_DEPTH}"
         )));
     }
-    if args.spp == 0 || args.spp > 4096 {
-        return Err(Error::Usage("--spp must be in 1..=4096".into()));
+    if !(1..=4096).contains(&args.spp) {
+        return Err(Error::Usage(format!(
+            "--spp {}: samples per pixel must be in 1..=4096",
+            args.spp
+        )));
     }
+    let spp = args.spp as u32;
     let out = args.outfile.clone().unwrap_or_else(|| {
         let stem = Path::new(&name)
             .file_stem()
@@ -440,22 +517,10 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         }
     }
 
-    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
-        .map_err(|e| {
-        // A value set by -D names the argument too.
-        let msg = e.to_string();
-        match whitted::io::scene_file::overrides_named(&msg, &args.define)[..] {
-            [] => e,
-            ref named => Error::Usage(format!(
-                "{msg} (set by {})",
-                named
-                    .iter()
-                    .map(|d| format!("-D '{d}'"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )),
-        }
-    })?;
+    // A value set by -D names the argument too.
+    let (mut scene, warnings) =
+        build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
+            .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?;
     check_subdivided_triangles(args.subdivide, scene.triangle_count() as u64)?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);
@@ -466,7 +531,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let settings = Settings {
         stage,
         depth: args.depth,
-        spp: args.spp,
+        spp,
         engine,
     };
     let world = World::new(scene);

@@ -360,3 +360,501 @@ fn error_in_a_mesh_names_scene_key_then_file() {
         )
     );
 }
+
+/// Runs `whitted ARGS` from the project folder; (exit code, stdout, stderr).
+fn run(args: &[&str]) -> (Option<i32>, String, String) {
+    let r = whitted()
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("WHITTED_ASSETS")
+        .output()
+        .unwrap();
+    (
+        r.status.code(),
+        String::from_utf8_lossy(&r.stdout).into_owned(),
+        String::from_utf8_lossy(&r.stderr).into_owned(),
+    )
+}
+
+/// A failure: exit code 2 and one line on stderr holding every `want`.
+fn fails_with(args: &[&str], wants: &[&str]) {
+    let (code, _, stderr) = run(args);
+    assert_eq!(code, Some(2), "{args:?}: {stderr}");
+    assert_eq!(
+        stderr.trim().lines().count(),
+        1,
+        "{args:?}: one line: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    for want in wants {
+        assert!(stderr.contains(want), "{args:?}: want {want:?} in {stderr}");
+    }
+}
+
+/// A success; its stdout.
+fn succeeds(args: &[&str]) -> String {
+    let (code, stdout, stderr) = run(args);
+    assert_eq!(code, Some(0), "{args:?}: {stderr}");
+    stdout
+}
+
+/// `-D background.cubemap=...` replaces the colour (and `-D background.color=...` the cube
+/// map), as the README's own example does; a whole table can be given inline.
+#[test]
+fn d_one_background_key_replaces_the_other() {
+    let toml = succeeds(&[
+        "scene",
+        "phong",
+        "-D",
+        "background.cubemap=textures/cubemap",
+    ]);
+    assert!(toml.contains("cubemap = \"textures/cubemap\""), "{toml}");
+    let background = toml.split("[background]").nth(1).unwrap();
+    assert!(
+        !background.split("[[").next().unwrap().contains("color"),
+        "{toml}"
+    );
+    let info = succeeds(&[
+        "info",
+        "cubemap",
+        "-D",
+        "background.color=[0, 0, 0]",
+        "--json",
+    ]);
+    assert!(
+        info.contains("\"background\":{\"color\":[0.0,0.0,0.0]}"),
+        "{info}"
+    );
+    for d in [
+        "background.cubemap=textures/cubemap",
+        "background={cubemap=\"textures/cubemap\"}",
+    ] {
+        let out = tmp("bg.png").display().to_string();
+        succeeds(&[
+            "render", "phong", "-D", d, "--width", "32", "--height", "24", "-q", "-o", &out,
+        ]);
+    }
+    // Both at once is still refused, with the file's line.
+    let both = tmp("both.toml");
+    let scene = succeeds(&["scene", "phong"]).replace(
+        "[background]\n",
+        "[background]\ncubemap = \"textures/cubemap\"\n",
+    );
+    let line = 1 + scene
+        .lines()
+        .position(|l| l.starts_with("cubemap"))
+        .unwrap();
+    std::fs::write(&both, scene).unwrap();
+    fails_with(
+        &["render", both.to_str().unwrap(), "-q"],
+        &[&format!(
+            "both.toml:{line}: background: give at most one of 'color' or 'cubemap'"
+        )],
+    );
+}
+
+/// Lights (and materials, meshes) are appended with `name[+]={...}`, or key by key at the
+/// index one past the end; an entry left incomplete names its `-D`.
+#[test]
+fn d_appends_lights() {
+    let lights = |defs: &[&str]| {
+        let mut args = vec!["info", "phong", "--json"];
+        for d in defs {
+            args.extend(["-D", d]);
+        }
+        let out = succeeds(&args);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        v["lights"].as_u64().unwrap()
+    };
+    assert_eq!(lights(&[]), 2);
+    assert_eq!(
+        lights(&["light[+]={position=[0, 5, 5], intensity=[1, 1, 1]}"]),
+        3
+    );
+    assert_eq!(
+        lights(&[
+            "light[2].position=[0, 5, 5]",
+            "light[2].intensity=[1, 1, 1]",
+            "light[+]={position=[1, 5, 5], intensity=[0.5, 0.5, 0.5]}",
+        ]),
+        4
+    );
+    fails_with(
+        &["info", "phong", "-D", "light[2].position=[0, 5, 5]"],
+        &["-D 'light[2].position=[0, 5, 5]': missing field `intensity`"],
+    );
+    fails_with(
+        &["info", "phong", "-D", "light[5].position=[0, 5, 5]"],
+        &["'light' has 2 entries"],
+    );
+    // A material appended with only a colour gets the documented defaults.
+    let toml = succeeds(&[
+        "scene",
+        "phong",
+        "-D",
+        "material[+]={name=\"red\", color=[1, 0, 0]}",
+        "-D",
+        "mesh[0].material=red",
+    ]);
+    assert!(toml.contains("name = \"red\""), "{toml}");
+}
+
+/// `info` and `scene` take built-in names, scene files and `-D`; `-D` on a mesh is refused.
+#[test]
+fn info_and_scene_take_builtin_names_files_and_d() {
+    let text = succeeds(&["info", "phong"]);
+    assert!(text.starts_with("kind: scene\n"), "{text}");
+    let json = succeeds(&["info", "refraction", "-D", "render.depth=4", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(
+        (v["kind"].as_str(), v["depth"].as_u64()),
+        (Some("scene"), Some(4))
+    );
+    let file = tmp("scene-file.toml");
+    std::fs::write(&file, succeeds(&["scene", "texture"])).unwrap();
+    let f = file.to_str().unwrap();
+    let printed = succeeds(&["scene", f, "-D", "camera.vfov=30"]);
+    assert!(printed.contains("vfov = 30"), "{printed}");
+    assert!(succeeds(&["info", f]).contains("kind: scene"));
+    let json = succeeds(&["info", f, "-D", "image.width=320", "--json"]);
+    assert!(json.contains("\"width\":320"), "{json}");
+    fails_with(
+        &["info", "phong", "-D", "camera.vfov=200"],
+        &[
+            "camera.vfov: must be in (0, 180)",
+            "(set by -D 'camera.vfov=200')",
+        ],
+    );
+    fails_with(
+        &["info", "meshes/cube.obj", "-D", "camera.vfov=30"],
+        &["-D applies to scenes"],
+    );
+    fails_with(&["scene", "nosuch"], &["neither a built-in scene"]);
+}
+
+/// A file of a type whitted does not read is refused by its extension, naming the types it
+/// reads, instead of being parsed as TOML.
+#[test]
+fn unknown_extensions_are_named_with_the_known_ones() {
+    let stl = tmp("a.stl");
+    std::fs::write(&stl, "solid a\nendsolid a\n").unwrap();
+    let s = stl.to_str().unwrap();
+    fails_with(
+        &["render", s],
+        &["a.stl: unknown file type '.stl'", ".toml", ".m, .obj, .ply"],
+    );
+    fails_with(
+        &["scene", s],
+        &["unknown file type '.stl'", ".m, .obj, .ply"],
+    );
+    fails_with(
+        &[
+            "trace-rays",
+            s,
+            "--rays",
+            "Cargo.toml",
+            "--hits",
+            "/dev/null",
+        ],
+        &["unknown mesh format '.stl'", ".m, .obj, .ply"],
+    );
+}
+
+/// Validation errors name the scene file and the line of the key (or of its table); the
+/// image size from `--width/--height` names the options.
+#[test]
+fn validation_errors_name_file_and_line() {
+    let scene = succeeds(&["scene", "phong"]);
+    let ior = scene.replacen("ior = 1.5", "ior = 0", 1);
+    let line = 1 + ior.lines().position(|l| l == "ior = 0").unwrap();
+    let p = tmp("p.toml");
+    std::fs::write(&p, &ior).unwrap();
+    let ps = p.to_str().unwrap();
+    fails_with(
+        &["render", ps, "-q"],
+        &[&format!(
+            "p.toml:{line}: material[0] 'kitten'.ior: must be a finite number > 0"
+        )],
+    );
+    let zero = scene.replacen("width = 1024", "width = 0", 1);
+    let line = 1 + zero.lines().position(|l| l == "width = 0").unwrap();
+    std::fs::write(&p, &zero).unwrap();
+    fails_with(
+        &["render", ps, "-q"],
+        &[&format!("p.toml:{line}: image: image size 0x768")],
+    );
+    fails_with(&["info", ps], &[&format!("p.toml:{line}: image")]);
+    fails_with(
+        &["render", "phong", "--width", "0", "-q"],
+        &["--width 0: the image size must be > 0 pixels"],
+    );
+    fails_with(
+        &["render", "phong", "-D", "image.width=0", "-q"],
+        &["image size 0x768", "(set by -D 'image.width=0')"],
+    );
+    // A key a table lacks points at the table's first key.
+    let vfov = scene.replacen("vfov = 36.0", "vfov = 360.0", 1);
+    let line = 1 + vfov.lines().position(|l| l == "vfov = 360.0").unwrap();
+    std::fs::write(&p, &vfov).unwrap();
+    fails_with(
+        &["info", ps],
+        &[&format!("p.toml:{line}: camera.vfov: must be in (0, 180)")],
+    );
+}
+
+/// Only `camera.eye` and `camera.look_at` are required: image size, vfov, `[render]`,
+/// `[background]` and a material's coefficients have documented defaults, so a material
+/// with only a colour renders, like the default material of a mesh rendered alone.
+#[test]
+fn a_material_with_only_a_colour_renders() {
+    let p = tmp("min.toml");
+    std::fs::write(
+        &p,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n[[light]]\nposition = [5, 6, 3]\n\
+         intensity = [0.9, 0.9, 0.85]\n\n[[material]]\nname = \"red\"\ncolor = [0.8, 0.1, 0.1]\n\n\
+         [[mesh]]\nshape = \"sphere\"\nmaterial = \"red\"\n",
+    )
+    .unwrap();
+    let ps = p.to_str().unwrap();
+    let json = succeeds(&["info", ps, "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(1024), Some(768))
+    );
+    assert_eq!(v["camera"]["vfov"].as_f64(), Some(36.0));
+    assert_eq!(
+        v["background"]["color"],
+        serde_json::json!([0.1, 0.12, 0.16])
+    );
+    assert_eq!(v["depth"].as_u64(), Some(1));
+    let toml = succeeds(&["scene", ps]);
+    let material = toml.split("[[material]]").nth(1).unwrap();
+    for want in [
+        "ka = 0.3",
+        "kd = 0.7",
+        "ks = 0.1",
+        "n = 40.0",
+        "ior = 1.5",
+        "kr = 0.0",
+    ] {
+        assert!(material.contains(want), "{want}: {toml}");
+    }
+    assert!(toml.contains("ambient = [0.15, 0.15, 0.18]"), "{toml}");
+    let out = tmp("min.png");
+    succeeds(&[
+        "render",
+        ps,
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let img = image::open(&out).unwrap().to_rgb8();
+    let centre = img.get_pixel(20, 15);
+    assert!(
+        centre[0] > 100 && centre[0] > 2 * centre[1],
+        "a lit red sphere: {centre:?}"
+    );
+    // The mesh alone gets the same material values.
+    let alone = succeeds(&["scene", "meshes/tetrahedron.m"]);
+    assert!(
+        alone.contains("ka = 0.3") || !alone.contains("[[material]]"),
+        "{alone}"
+    );
+}
+
+/// Every option and argument of every subcommand has a help text.
+#[test]
+fn every_flag_has_help() {
+    for sub in ["render", "scene", "info", "trace-rays", "merge", "bench"] {
+        let help = succeeds(&[sub, "--help"]);
+        let lines: Vec<&str> = help.lines().collect();
+        let mut seen = 0;
+        for (i, line) in lines.iter().enumerate() {
+            let t = line.trim_start();
+            let indent = line.len() - t.len();
+            let is_arg = (2..=6).contains(&indent)
+                && (t.starts_with('-') || t.starts_with('<') || t.starts_with('['));
+            if !is_arg {
+                continue;
+            }
+            seen += 1;
+            // The long help puts each argument's text on the lines under it, indented more.
+            let next = lines.get(i + 1).copied().unwrap_or("");
+            let under =
+                next.len() - next.trim_start().len() > indent + 2 && !next.trim().is_empty();
+            let beside = t
+                .split_once("  ")
+                .is_some_and(|(_, r)| !r.trim().is_empty());
+            let text = under || beside;
+            assert!(text, "{sub}: no help on `{line}`\n{help}");
+        }
+        assert!(seen >= 2, "{sub}: {help}");
+    }
+    let render = succeeds(&["render", "--help"]);
+    assert!(render.contains("Image width in pixels"), "{render}");
+    for sub in ["trace-rays", "bench"] {
+        let help = succeeds(&[sub, "--help"]);
+        assert!(help.contains(".m, .obj or .ply"), "{sub}: {help}");
+    }
+}
+
+/// pbrt's spellings are accepted: `--cropwindow x0 x1 y0 y1`, `--pixelbounds`, `--outfile`,
+/// `--nthreads`; the space-separated crop equals the comma form bit for bit.
+#[test]
+fn pbrt_spellings_are_aliases() {
+    let (a, b, c) = (tmp("crop-a.png"), tmp("crop-b.png"), tmp("crop-c.png"));
+    let size = ["--width", "64", "--height", "48", "-q"];
+    let mut args = vec![
+        "render",
+        "phong",
+        "--crop",
+        "0,0.5,0,0.5",
+        "-o",
+        a.to_str().unwrap(),
+    ];
+    args.extend(size);
+    succeeds(&args);
+    let mut args = vec![
+        "render",
+        "--cropwindow",
+        "0",
+        "0.5",
+        "0",
+        "0.5",
+        "phong",
+        "--nthreads",
+        "1",
+        "--outfile",
+        b.to_str().unwrap(),
+    ];
+    args.extend(size);
+    succeeds(&args);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let mut args = vec![
+        "render",
+        "phong",
+        "--pixelbounds",
+        "0",
+        "32",
+        "0",
+        "24",
+        "-o",
+        c.to_str().unwrap(),
+    ];
+    args.extend(size);
+    succeeds(&args);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&c).unwrap());
+    // A comma list is the whole value: the scene after it stays the scene.
+    let d = tmp("crop-d.png");
+    let mut args = vec![
+        "render",
+        "--crop",
+        "0,0.5,0,0.5",
+        "phong",
+        "-o",
+        d.to_str().unwrap(),
+    ];
+    args.extend(size);
+    succeeds(&args);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&d).unwrap());
+    assert!(succeeds(&["trace-rays", "--help"]).contains("nthreads"));
+    fails_with(
+        &["render", "phong", "--crop", "-0.5,0.5,0,1", "-q"],
+        &["--crop -0.5,0.5,0,1: four fractions in [0, 1]"],
+    );
+}
+
+/// A negative count gets whitted's own message, not clap's "use '-- -1'" hint.
+#[test]
+fn negative_spp_gets_a_clear_message() {
+    for spp in ["-1", "0", "5000"] {
+        fails_with(
+            &["render", "phong", "--spp", spp, "-q"],
+            &[&format!(
+                "--spp {spp}: samples per pixel must be in 1..=4096"
+            )],
+        );
+    }
+    fails_with(
+        &["render", "phong", "--width", "-5", "-q"],
+        &["--width -5: the image size must be > 0 pixels"],
+    );
+}
+
+/// `scene` of a mesh without MTL materials prints no empty material list and no comment
+/// about MTL; one with materials says they are mapped from MTL.
+#[test]
+fn scene_of_a_mesh_without_mtl() {
+    let toml = succeeds(&["scene", "meshes/fandisk.m"]);
+    assert!(!toml.contains("material = []"), "{toml}");
+    assert!(
+        !toml.contains("light = []") && !toml.contains("mesh = []"),
+        "{toml}"
+    );
+    assert!(!toml.contains("MTL"), "{toml}");
+    assert!(toml.contains("default material"), "{toml}");
+    let dir = tmp("mtl");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("t.mtl"), "newmtl red\nKd 1 0 0\n").unwrap();
+    std::fs::write(
+        dir.join("t.obj"),
+        "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
+    let toml = succeeds(&["scene", dir.join("t.obj").to_str().unwrap()]);
+    assert!(
+        toml.contains("mapped from MTL") && toml.contains("name = \"red\""),
+        "{toml}"
+    );
+}
+
+/// Open edges are counted by position: `spot.obj` splits vertices at its uv seams but is
+/// closed.
+#[test]
+fn info_counts_open_edges_by_position() {
+    let text = succeeds(&["info", "meshes/spot.obj"]);
+    assert!(text.contains("open_edges: 0\n"), "{text}");
+    // An open mesh still has its boundary: a single triangle has 3.
+    let tri = tmp("tri.obj");
+    std::fs::write(&tri, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let text = succeeds(&["info", tri.to_str().unwrap()]);
+    assert!(text.contains("open_edges: 3\n"), "{text}");
+}
+
+/// `kr` follows `ks` when `ks` is given, in the file or by `-D`, and is 0 when neither `ks`
+/// nor `kr` is given.
+#[test]
+fn kr_follows_ks_when_ks_is_given() {
+    let p = tmp("kr.toml");
+    std::fs::write(
+        &p,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[material]]\nname = \"a\"\n\
+         [[material]]\nname = \"b\"\nks = 0.5\n[[mesh]]\nshape = \"cube\"\nmaterial = \"a\"\n",
+    )
+    .unwrap();
+    let ps = p.to_str().unwrap();
+    let kr = |toml: &str, name: &str| {
+        let m = toml
+            .split("[[material]]")
+            .find(|m| m.contains(&format!("name = \"{name}\"")))
+            .unwrap()
+            .to_string();
+        m.lines()
+            .find(|l| l.starts_with("kr = "))
+            .map(|l| l.to_string())
+    };
+    let toml = succeeds(&["scene", ps]);
+    assert_eq!(kr(&toml, "a").as_deref(), Some("kr = 0.0"), "{toml}");
+    assert_eq!(kr(&toml, "b"), None, "b's kr is its ks: {toml}");
+    let toml = succeeds(&["scene", ps, "-D", "material[0].ks=0.7"]);
+    assert_eq!(
+        kr(&toml, "a"),
+        None,
+        "a's kr follows the ks set by -D: {toml}"
+    );
+}

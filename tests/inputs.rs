@@ -392,7 +392,7 @@ fn regression_allocation_caps() {
 
 /// Found by the scene fuzzer (a 6 s timeout): a generated sphere subdivided 5 times is 4.7M
 /// triangles, under the old per-mesh cap of 2^24 but seconds of work from a one-line change.
-/// Subdivision now has a scene-wide budget of 2^20 triangles.
+/// Subdivision has a scene-wide budget of 2^20 triangles.
 #[test]
 fn regression_fuzz_scene_timeout_sphere_subdivide_5() {
     let text = TOML_TEXT.replace("subdivide = 1", "subdivide = 5");
@@ -408,7 +408,7 @@ fn regression_fuzz_scene_timeout_sphere_subdivide_5() {
 }
 
 /// Found by the scene fuzzer (`check_mesh` assertion): a `quad` (or `cube`) of size 0 got
-/// NaN normals from the shape generator. Generated shapes now go through `ensure_normals`.
+/// NaN normals from the shape generator. Generated shapes go through `ensure_normals`.
 #[test]
 fn regression_fuzz_scene_zero_size_shape_normals() {
     for shape in ["quad", "cube"] {
@@ -427,7 +427,7 @@ fn regression_fuzz_scene_zero_size_shape_normals() {
 /// Found by the cubemap fuzzer (`attempt to multiply with overflow` in zune-jpeg 0.5.15,
 /// `bitstream.rs:400`): a JPEG whose DC differences keep adding up overflows the decoder's
 /// `dc_prediction * qt_table[0]` (zune-image#382). A release build wraps; a debug build and
-/// the fuzz build panicked. zune-jpeg is now built without overflow checks in every profile
+/// the fuzz build panicked. zune-jpeg is built without overflow checks in every profile
 /// (`Cargo.toml`, `fuzz/Cargo.toml`), so this test means something in a debug build.
 #[test]
 fn regression_fuzz_cubemap_jpeg_dc_overflow() {
@@ -844,7 +844,7 @@ fn caps_are_checked_before_generating_shapes() {
     assert!(text.len() > 100_000);
     let e = scene_err(&text);
     assert!(
-        e.starts_with("fuzz.toml: mesh[3720]: the scene's meshes add up to over 33554432"),
+        e.starts_with("fuzz.toml:11185: mesh[3720]: the scene's meshes add up to over 33554432"),
         "{e}"
     );
     // The subdivision budget, too: 2^20 triangles made by subdividing, from the parameters.
@@ -863,7 +863,6 @@ fn caps_are_checked_before_generating_shapes() {
 /// `whitted info` on a file type it does not read says which types it does.
 #[test]
 fn info_on_an_unknown_file_type_lists_the_types() {
-    // (.ply was the unknown type here until issue 12 made PLY a mesh format.)
     let dir = scene_dir("info", &[("x.stl", b"solid x\nendsolid x\n")]);
     let e = whitted::info::run(&dir.join("x.stl"), false)
         .unwrap_err()

@@ -1,7 +1,7 @@
 //! Measurements behind two design choices (not assertions; run on demand):
 //!
 //! ```sh
-//! WHITTED_ASSETS=../shared cargo test --release --test measure -- --ignored --nocapture
+//! WHITTED_ASSETS=/path/to/course-meshes cargo test --release --test measure -- --ignored --nocapture
 //! ```
 //!
 //! 1. obvhs build preset: build time (kitten, bunny, subdivided kittens) and the packet

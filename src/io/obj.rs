@@ -296,7 +296,7 @@ fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<
                         let i: i64 = s
                             .parse()
                             .map_err(|_| err(format!("f: '{vert}': '{s}' is not an index")))?;
-                        // 1..=n counts from the start, -n..=-1 back from the latest entry.
+                        // 1..=n counts from the start, -n..=-1 back from the most recent entry.
                         let abs = match i {
                             1.. if i.unsigned_abs() <= n => i.unsigned_abs() - 1,
                             ..=-1 if i.unsigned_abs() <= n => n - i.unsigned_abs(),

@@ -36,23 +36,26 @@ pub const MAX_CHECKER_TEXELS: u64 = 1 << 25;
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    /// `[image]`: the output size.
+    /// `[image]`: the output size (optional, default 1024 x 768).
+    #[serde(default)]
     pub image: ImageDesc,
-    /// `[camera]`: the pinhole camera.
+    /// `[camera]`: the pinhole camera (required: `eye` and `look_at`).
     pub camera: CameraDesc,
     /// `[render]`: depth, culling, ambient light (all optional).
     #[serde(default)]
     pub render: RenderDesc,
-    /// `[background]`: a colour or a cube map.
+    /// `[background]`: a colour or a cube map (optional, default the canonical colour
+    /// [`DEFAULT_BACKGROUND`]).
+    #[serde(default)]
     pub background: BackgroundDesc,
     /// `[[light]]`: point lights.
-    #[serde(default, rename = "light")]
+    #[serde(default, rename = "light", skip_serializing_if = "Vec::is_empty")]
     pub lights: Vec<LightDesc>,
     /// `[[material]]`: named materials.
-    #[serde(default, rename = "material")]
+    #[serde(default, rename = "material", skip_serializing_if = "Vec::is_empty")]
     pub materials: Vec<MaterialDesc>,
     /// `[[mesh]]`: meshes from files, inline triangles or generated shapes.
-    #[serde(default, rename = "mesh")]
+    #[serde(default, rename = "mesh", skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<MeshDesc>,
     /// Lines of the keys in the text this was parsed from (empty for scenes made in code).
     #[serde(skip)]
@@ -119,10 +122,28 @@ impl KeyLines {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ImageDesc {
-    /// Pixels across (the image must have at most `MAX_PIXELS`).
+    /// Pixels across (default 1024; the image must have at most `MAX_PIXELS`).
+    #[serde(default = "default_width")]
     pub width: u64,
-    /// Pixels down.
+    /// Pixels down (default 768).
+    #[serde(default = "default_height")]
     pub height: u64,
+}
+
+impl Default for ImageDesc {
+    fn default() -> Self {
+        ImageDesc {
+            width: default_width(),
+            height: default_height(),
+        }
+    }
+}
+
+fn default_width() -> u64 {
+    1024
+}
+fn default_height() -> u64 {
+    768
 }
 
 /// `[camera]` (SCENES.md §1).
@@ -138,8 +159,13 @@ pub struct CameraDesc {
     /// The up direction (default +y); must not be parallel to the view direction.
     #[serde(default = "default_up", deserialize_with = "exact3::de")]
     pub up: [f32; 3],
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in (0, 180) (default 36, the canonical view's).
+    #[serde(default = "default_vfov")]
     pub vfov: f32,
+}
+
+fn default_vfov() -> f32 {
+    36.0
 }
 
 /// `[T; 3]` fields that refuse arrays of any other length (serde's array impl would let TOML
@@ -186,8 +212,8 @@ pub struct RenderDesc {
     /// Skip back faces, for every ray (default true).
     #[serde(default = "default_true")]
     pub cull_backfaces: bool,
-    /// Ambient light `Ia` (default black).
-    #[serde(default, deserialize_with = "exact3::de")]
+    /// Ambient light `Ia` (default SCENES.md's `[0.15, 0.15, 0.18]`, [`DEFAULT_AMBIENT`]).
+    #[serde(default = "default_ambient", deserialize_with = "exact3::de")]
     pub ambient: [f32; 3],
 }
 
@@ -196,9 +222,16 @@ impl Default for RenderDesc {
         RenderDesc {
             depth: default_depth(),
             cull_backfaces: true,
-            ambient: [0.0; 3],
+            ambient: DEFAULT_AMBIENT,
         }
     }
+}
+
+/// The ambient light `Ia` of a scene that does not give one (SCENES.md's).
+pub const DEFAULT_AMBIENT: [f32; 3] = [0.15, 0.15, 0.18];
+
+fn default_ambient() -> [f32; 3] {
+    DEFAULT_AMBIENT
 }
 
 fn default_depth() -> u32 {
@@ -211,7 +244,10 @@ fn is_true(v: &bool) -> bool {
     *v
 }
 
-/// `[background]`: exactly one of `color` or `cubemap`.
+/// The background colour when a scene gives neither `color` nor `cubemap` (SCENES.md's).
+pub const DEFAULT_BACKGROUND: [f32; 3] = [0.1, 0.12, 0.16];
+
+/// `[background]`: at most one of `color` or `cubemap` (neither: [`DEFAULT_BACKGROUND`]).
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundDesc {
@@ -245,7 +281,8 @@ pub struct LightDesc {
 pub struct MaterialDesc {
     /// The name meshes refer to it by (unique).
     pub name: String,
-    /// Exactly one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`.
+    /// At most one of `color`, `vertex_color = true`, `texture` or `checker` gives `Od`
+    /// (none: `color = [0.8, 0.8, 0.8]`, [`DEFAULT_COLOR`]).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -262,13 +299,18 @@ pub struct MaterialDesc {
     /// `Od` from a procedural checker at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checker: Option<CheckerDesc>,
-    /// Ambient coefficient: a number (the same in every channel) or `[r, g, b]`.
+    /// Ambient coefficient: a number (the same in every channel) or `[r, g, b]` (default 0.3).
+    #[serde(default = "default_ka")]
     pub ka: Coef,
-    /// Diffuse coefficient (a number or `[r, g, b]`).
+    /// Diffuse coefficient (a number or `[r, g, b]`, default 0.7).
+    #[serde(default = "default_kd")]
     pub kd: Coef,
-    /// Specular (and, unless `kr` is given, reflection) coefficient (a number or `[r, g, b]`).
+    /// Specular (and, unless `kr` is given, reflection) coefficient (a number or `[r, g, b]`,
+    /// default 0.1; when `ks` is omitted, `kr` defaults to 0, as in [`default_material`]).
+    #[serde(default = "default_ks")]
     pub ks: Coef,
-    /// Phong exponent.
+    /// Phong exponent (default 40).
+    #[serde(default = "default_n")]
     pub n: f32,
     /// Transmission coefficient (default 0; a number or `[r, g, b]`).
     #[serde(default, skip_serializing_if = "Coef::is_zero")]
@@ -289,6 +331,18 @@ pub struct MaterialDesc {
 
 fn default_ior() -> f32 {
     1.5
+}
+fn default_ka() -> Coef {
+    Coef::Scalar(0.3)
+}
+fn default_kd() -> Coef {
+    Coef::Scalar(0.7)
+}
+fn default_ks() -> Coef {
+    Coef::Scalar(0.1)
+}
+fn default_n() -> f32 {
+    40.0
 }
 
 /// A material coefficient: one number for all three channels, or an RGB triple.
@@ -461,7 +515,22 @@ impl SceneFile {
             Error::parse(path, line, format!("column {col}: {msg}"))
         })?;
         file.lines = KeyLines::of(text);
+        // `kr` omitted = `ks`, but a material that gives neither gets the default material's
+        // no reflection (a material with only a colour renders like a mesh's default).
+        for (i, m) in file.materials.iter_mut().enumerate() {
+            let given = |k: &str| file.lines.line(&format!("material[{i}].{k}")).is_some();
+            if m.kr.is_none() && !given("ks") && !given("kr") {
+                m.kr = Some(Coef::Scalar(0.0));
+            }
+        }
         Ok(file)
+    }
+
+    /// The image size, checked against the pixel cap; the error names the scene and the
+    /// line of its `[image]` keys.
+    pub fn image_size(&self, path: &Path) -> Result<(u32, u32)> {
+        check_size(self.image.width, self.image.height)
+            .map_err(|m| locate(self, Error::scene(path, format!("image: {m}"))))
     }
 
     /// Read and parse a scene file; bytes that are not UTF-8 are refused with their line. An
@@ -484,6 +553,9 @@ impl SceneFile {
     }
 }
 
+/// The index `[+]` stands for in a `-D` key: a new entry at the end of the array.
+const APPEND: usize = usize::MAX;
+
 /// One `-D key=value` override: a TOML path (`camera.vfov`, `light[0].intensity`) and a TOML
 /// value (`30`, `[1, 1, 1]`, `true`, `"name"`; anything that does not parse as TOML is taken
 /// as a string, so `-D background.cubemap=textures/cubemap` needs no quotes).
@@ -503,8 +575,14 @@ fn apply_override(root: &mut toml::Value, def: &str) -> std::result::Result<(), 
             Some((name, rest)) => {
                 let i = rest
                     .strip_suffix(']')
-                    .and_then(|i| i.parse::<usize>().ok())
-                    .ok_or_else(|| format!("'{seg}': expected name[index]"))?;
+                    .and_then(|i| {
+                        if i == "+" {
+                            Some(APPEND)
+                        } else {
+                            i.parse::<usize>().ok()
+                        }
+                    })
+                    .ok_or_else(|| format!("'{seg}': expected name[index] or name[+]"))?;
                 (name, Some(i))
             }
             None => (seg, None),
@@ -515,12 +593,29 @@ fn apply_override(root: &mut toml::Value, def: &str) -> std::result::Result<(), 
         segments.push((name, index));
     }
     let last = segments.len() - 1;
+    // Setting one source of a table's exclusive group (background colour or cube map, a
+    // material's colour source, a mesh's geometry) replaces the others.
+    let replaced: &[&str] = match (segments.len(), segments[0].0, segments[last].0) {
+        (2, "background", "color") => &["cubemap"],
+        (2, "background", "cubemap") => &["color"],
+        (2, "material", "color") => &["texture", "checker"],
+        (2, "material", "vertex_color") => &["texture", "checker"],
+        (2, "material", "texture") => &["color", "vertex_color", "checker"],
+        (2, "material", "checker") => &["color", "vertex_color", "texture"],
+        (2, "mesh", "file") => &["vertices", "faces", "shape", "center", "radius", "size"],
+        (2, "mesh", "vertices" | "faces") => &["file", "shape", "center", "radius", "size"],
+        (2, "mesh", "shape") => &["file", "vertices", "faces"],
+        _ => &[],
+    };
     let mut node = root;
     for (k, (name, index)) in segments.into_iter().enumerate() {
         let toml::Value::Table(table) = node else {
             return Err(format!("'{name}': its parent is not a table"));
         };
         if k == last && index.is_none() {
+            for r in replaced {
+                table.remove(*r);
+            }
             table.insert(name.to_string(), value);
             return Ok(());
         }
@@ -537,10 +632,13 @@ fn apply_override(root: &mut toml::Value, def: &str) -> std::result::Result<(), 
                 let toml::Value::Array(items) = entry else {
                     return Err(format!("'{name}' is not an array"));
                 };
-                // One past the end appends a new entry (a new light, material or mesh).
-                if i == items.len() {
+                // One past the end, or `[+]`, appends a new entry (a light, material or mesh).
+                let i = if i == items.len() || i == APPEND {
                     items.push(toml::Value::Table(toml::Table::new()));
-                }
+                    items.len() - 1
+                } else {
+                    i
+                };
                 let n = items.len();
                 let item = items
                     .get_mut(i)
@@ -564,25 +662,143 @@ impl SceneFile {
             return Ok(self.clone());
         }
         let mut root = toml::Value::try_from(self).expect("scene serialises");
+        let first_line = |e: toml::de::Error| {
+            e.message()
+                .lines()
+                .next()
+                .unwrap_or("invalid")
+                .trim()
+                .to_string()
+        };
+        // A key a later -D may still give (`-D light[2].position=..` then `.intensity`).
+        let mut incomplete: Option<&str> = None;
         for def in defs {
             let fail = |m: String| Error::Usage(format!("-D '{def}': {m}"));
             apply_override(&mut root, def).map_err(fail)?;
+            self.follow_ks(&mut root, def);
+            fill_material_defaults(&mut root);
             // Check each override at once, so the error names the one that broke the scene.
-            SceneFile::deserialize(root.clone()).map_err(|e| {
-                fail(
-                    e.message()
-                        .lines()
-                        .next()
-                        .unwrap_or("invalid")
-                        .trim()
-                        .to_string(),
-                )
-            })?;
+            match SceneFile::deserialize(root.clone()) {
+                Ok(_) => incomplete = None,
+                Err(e) if e.message().starts_with("missing field") => {
+                    incomplete = incomplete.or(Some(def));
+                }
+                Err(e) => return Err(fail(first_line(e))),
+            }
         }
-        let mut file = SceneFile::deserialize(root).expect("checked above");
+        let mut file = SceneFile::deserialize(root).map_err(|e| {
+            let def = incomplete.unwrap_or("");
+            Error::Usage(format!("-D '{def}': {}", first_line(e)))
+        })?;
         // Errors about the files the scene names still point at the lines of its text.
         file.lines = self.lines.clone();
         Ok(file)
+    }
+}
+
+impl SceneFile {
+    /// `-D material[i].ks=..` on a material whose file gave neither `ks` nor `kr` (so `kr`
+    /// was set to 0 when it was read): `ks` is given now, so `kr` follows it, as in a file.
+    fn follow_ks(&self, root: &mut toml::Value, def: &str) {
+        let key = def.split_once('=').map_or(def, |(k, _)| k).trim();
+        let Some(i) = key
+            .strip_prefix("material[")
+            .and_then(|r| r.strip_suffix("].ks"))
+            .and_then(|i| i.parse::<usize>().ok())
+        else {
+            return;
+        };
+        let given = |k: &str| self.lines.line(&format!("material[{i}].{k}")).is_some();
+        let filled = self
+            .materials
+            .get(i)
+            .is_some_and(|m| m.kr == Some(Coef::Scalar(0.0)))
+            && !self.lines.0.is_empty()
+            && !given("ks")
+            && !given("kr");
+        if filled
+            && let Some(toml::Value::Array(items)) = root.get_mut("material")
+            && let Some(toml::Value::Table(t)) = items.get_mut(i)
+        {
+            t.remove("kr");
+        }
+    }
+}
+
+/// A material appended by `-D` that gives neither `ks` nor `kr` reflects nothing, as one
+/// written in a file without them (see [`SceneFile::parse`]).
+fn fill_material_defaults(root: &mut toml::Value) {
+    let Some(toml::Value::Array(items)) = root.get_mut("material") else {
+        return;
+    };
+    for item in items {
+        if let toml::Value::Table(t) = item
+            && !t.contains_key("ks")
+            && !t.contains_key("kr")
+        {
+            t.insert("kr".into(), toml::Value::Float(0.0));
+        }
+    }
+}
+
+/// Give a validation error about a key the line of that key (or of its table) in the
+/// scene's text: `scene.toml:12: material[0] 'kitten'.ior: ...`. Other errors, and scenes
+/// not read from text, are returned as they are.
+fn locate(file: &SceneFile, e: Error) -> Error {
+    let Error::Scene { path, msg } = e else {
+        return e;
+    };
+    // `material[0] 'kitten'.ior: ...` is about the key `material[0].ior`.
+    let mut key = String::new();
+    let mut quoted = false;
+    for c in msg.chars() {
+        match c {
+            '\'' => quoted = !quoted,
+            _ if quoted => {}
+            ' ' => {}
+            c if c.is_ascii_alphanumeric() || "_.[]".contains(c) => key.push(c),
+            _ => break,
+        }
+    }
+    let lines = &file.lines;
+    // The key's own line, else the first line of the keys under it (a table's first key).
+    let find = |k: &str| {
+        lines.line(k).or_else(|| {
+            lines
+                .0
+                .iter()
+                .filter(|(x, _)| x.starts_with(&format!("{k}.")) || x.starts_with(&format!("{k}[")))
+                .map(|&(_, l)| l)
+                .min()
+        })
+    };
+    let mut k = key.as_str();
+    while !k.is_empty() {
+        if let Some(line) = find(k) {
+            return Error::Parse { path, line, msg };
+        }
+        k = match k.rfind(['.', '[']) {
+            Some(at) => &k[..at],
+            None => "",
+        };
+    }
+    Error::Scene { path, msg }
+}
+
+/// A validation error about a value set by `-D`, with the argument named:
+/// `... (set by -D 'camera.vfov=200')`. Other errors are returned as they are.
+pub fn name_overrides(e: Error, defs: &[String]) -> Error {
+    let msg = e.to_string();
+    match overrides_named(&msg, defs)[..] {
+        [] => e,
+        ref named => Error::Usage(format!(
+            "{msg} (set by {})",
+            named
+                .iter()
+                .map(|d| format!("-D '{d}'"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
     }
 }
 
@@ -598,7 +814,9 @@ pub fn overrides_named<'a>(message: &str, defs: &'a [String]) -> Vec<&'a str> {
             }
             match (key.split_once('.'), key.rsplit_once('.')) {
                 (Some((first, _)), Some((_, last))) => {
-                    message.contains(first) && message.contains(&format!(".{last}"))
+                    // `image: ...` is about every key of `[image]`.
+                    message.contains(&format!(" {first}: "))
+                        || (message.contains(first) && message.contains(&format!(".{last}")))
                 }
                 _ => false,
             }
@@ -606,13 +824,32 @@ pub fn overrides_named<'a>(message: &str, defs: &'a [String]) -> Vec<&'a str> {
         .collect()
 }
 
-/// Refuse an image given as a scene (TOML would call it `key with no value`). Meshes are not
-/// refused here: the CLI renders a mesh file given as the scene directly (see
-/// [`crate::io::mesh_scene`]) before any scene file is loaded.
+/// Refuse an image, a mesh or a file of an unknown type given as a scene (TOML would call it
+/// `key with no value`), naming the types read. The CLI renders a mesh file given as the
+/// scene directly (see [`crate::io::mesh_scene`]) before any scene file is loaded.
 fn not_a_scene(path: &Path) -> Result<()> {
     let ext = crate::io::extension(path);
-    if !crate::io::image::IMAGE_EXTENSIONS.contains(&ext.as_str()) {
+    if ext == "toml" || ext.is_empty() {
         return Ok(());
+    }
+    if crate::io::MESH_EXTENSIONS.contains(&ext.as_str()) {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            msg: format!(
+                "this is a mesh (.{ext}), but a scene file (.toml) is expected; \
+                 `whitted scene {} > my.toml` makes one that renders it",
+                path.display()
+            ),
+        });
+    }
+    if !crate::io::image::IMAGE_EXTENSIONS.contains(&ext.as_str()) {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            msg: format!(
+                "unknown file type '.{ext}'; a scene is a .toml file, a mesh is {}",
+                crate::io::list_extensions(&crate::io::MESH_EXTENSIONS)
+            ),
+        });
     }
     Err(Error::Format {
         path: path.to_path_buf(),
@@ -770,7 +1007,17 @@ pub fn check_size(width: u64, height: u64) -> std::result::Result<(u32, u32), St
 
 /// Validate a parsed scene and load everything it names. `path` is the scene's name in
 /// messages; `search` finds its files.
+/// Errors about a key name the scene file and the key's line (`scene.toml:9: camera.vfov:
+/// ...`) when the scene was read from text.
 pub fn build_scene(
+    file: &SceneFile,
+    path: &Path,
+    search: &SearchPath,
+) -> Result<(Scene, Vec<String>)> {
+    build_scene_at(file, path, search).map_err(|e| locate(file, e))
+}
+
+fn build_scene_at(
     file: &SceneFile,
     path: &Path,
     search: &SearchPath,
@@ -828,6 +1075,7 @@ pub fn build_scene(
 
     let background = match (&file.background.color, &file.background.cubemap) {
         (Some(col), None) => Background::Color(nonneg3(*col, "background.color", path)?),
+        (None, None) => Background::Color(Vec3::from(DEFAULT_BACKGROUND)),
         (None, Some(dir)) => Background::CubeMap(Arc::new(
             search
                 .resolve(dir)
@@ -837,7 +1085,7 @@ pub fn build_scene(
         _ => {
             return Err(Error::scene(
                 path,
-                "background: give exactly one of 'color' or 'cubemap'",
+                "background: give at most one of 'color' or 'cubemap'",
             ));
         }
     };
@@ -873,7 +1121,7 @@ pub fn build_scene(
         if materials.iter().any(|x: &Material| x.name == m.name) {
             return Err(Error::scene(
                 path,
-                format!("material '{}' is defined twice", m.name),
+                format!("material[{i}].name: '{}' is defined twice", m.name),
             ));
         }
         let prefix = format!("material[{i}] '{}'", m.name);
@@ -1067,14 +1315,14 @@ pub const DEFAULT_MATERIAL: &str = "default";
 pub fn default_material(vertex_colors: bool) -> MaterialDesc {
     MaterialDesc {
         name: DEFAULT_MATERIAL.into(),
-        color: (!vertex_colors).then_some([0.8; 3]),
+        color: (!vertex_colors).then_some([DEFAULT_COLOR; 3]),
         vertex_color: vertex_colors,
         texture: None,
         checker: None,
-        ka: Coef::Scalar(0.3),
-        kd: Coef::Scalar(0.7),
-        ks: Coef::Scalar(0.1),
-        n: 40.0,
+        ka: default_ka(),
+        kd: default_kd(),
+        ks: default_ks(),
+        n: default_n(),
         kt: Coef::Scalar(0.0),
         ior: 1.5,
         kr: Some(Coef::Scalar(0.0)),
@@ -1082,6 +1330,9 @@ pub fn default_material(vertex_colors: bool) -> MaterialDesc {
         lamp: true,
     }
 }
+
+/// `Od` of a material that names no colour source (and of [`default_material`]).
+pub const DEFAULT_COLOR: f32 = 0.8;
 
 /// Validate one material description and load its texture (one load per file).
 fn build_material(
@@ -1098,7 +1349,7 @@ fn build_material(
         + m.vertex_color as u32
         + m.texture.is_some() as u32
         + m.checker.is_some() as u32;
-    if sources != 1 {
+    if sources > 1 {
         return Err(Error::scene(
             path,
             format!(
@@ -1107,10 +1358,11 @@ fn build_material(
             ),
         ));
     }
-    let color = m
-        .color
-        .map(|c| nonneg3(c, &key("color"), path))
-        .transpose()?;
+    // No source at all: the default material's grey.
+    let color = match (m.color, sources) {
+        (None, 0) => Some(Vec3::splat(DEFAULT_COLOR)),
+        (c, _) => c.map(|c| nonneg3(c, &key("color"), path)).transpose()?,
+    };
     let albedo = if m.vertex_color {
         Albedo::VertexColor
     } else if let Some(col) = color {
@@ -1477,6 +1729,59 @@ faces = [[0, 1, 2]]
         assert_eq!(s.objects[0].mesh.triangles.len(), 1);
         let f = SceneFile::parse(MINIMAL, Path::new("s")).unwrap();
         assert_eq!(SceneFile::parse(&f.to_toml(), Path::new("s")).unwrap(), f);
+    }
+
+    #[test]
+    fn overrides_replace_alternatives_and_append_entries() {
+        let f = SceneFile::parse(MINIMAL, Path::new("s.toml")).unwrap();
+        let d = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let g = f.with_overrides(&d(&["background.cubemap=sky"])).unwrap();
+        assert_eq!(g.background.color, None);
+        assert_eq!(g.background.cubemap.as_deref(), Some("sky"));
+        let g = f
+            .with_overrides(&d(&[
+                "light[+]={position=[0, 1, 0], intensity=[1, 1, 1]}",
+                "light[1].position=[1, 1, 1]",
+                "light[1].intensity=[0.5, 0.5, 0.5]",
+                "material[0].texture=t.png",
+            ]))
+            .unwrap();
+        assert_eq!(g.lights.len(), 2);
+        assert_eq!(g.lights[1].intensity, [0.5; 3]);
+        assert_eq!(g.materials[0].color, None);
+        let e = f
+            .with_overrides(&d(&["light[0].position=[1, 1, 1]"]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("-D 'light[0].position=[1, 1, 1]': missing field `intensity`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn validation_errors_carry_the_key_line_and_defaults_fill_the_rest() {
+        let e = build(&MINIMAL.replace("vfov = 40", "vfov = 400"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("s.toml:8: camera.vfov"), "{e}");
+        // Only the camera's eye and look_at are required.
+        let s = build(
+            "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[material]]\nname = \"m\"\n\
+             [[mesh]]\nmaterial = \"m\"\nshape = \"cube\"\n",
+        )
+        .unwrap();
+        assert_eq!(
+            (s.width, s.height, s.view.vfov, s.depth),
+            (1024, 768, 36.0, 1)
+        );
+        let m = &s.materials[0];
+        assert_eq!(
+            (m.ka, m.kd, m.ks, m.n),
+            (Vec3::splat(0.3), Vec3::splat(0.7), Vec3::splat(0.1), 40.0)
+        );
+        assert_eq!(m.kr, Vec3::ZERO);
+        assert!(matches!(m.albedo, Albedo::Color(c) if c == Vec3::splat(DEFAULT_COLOR)));
     }
 
     #[test]
