@@ -16,7 +16,7 @@
 //! Where two engines are candidates, which is faster depends on the mesh as well (how soon
 //! a packet's lanes part), so a batch of at least [`PILOT_MIN`] rays settles it by a pilot
 //! ([`pilot`]): one 128-ray block in 512 (at least 16), spread over the batch, each traced by
-//! both and timed; the batch is then traced by the faster (the pilot's blocks again: 0.4% of
+//! both and timed; the batch is then traced by the one with the smaller total (the pilot's blocks again: 0.4% of
 //! a large batch's rays are traced twice more, 3.1% at [`PILOT_MIN`], 2% at the bench's
 //! 201,702 rays). Smaller batches (and the renderer's tile-sized queues) take the first
 //! candidate.
@@ -274,9 +274,12 @@ pub fn pilot_blocks(n: usize) -> Vec<std::ops::Range<usize>> {
 /// Time the two candidates on the pilot blocks of a batch of `n` rays (`run(engine, rays)`
 /// traces the rays of one block with `engine`): both trace every block, `a` first on even
 /// blocks and `b` first on odd ones, so that what the first leaves in the cache favours
-/// each alike. Per pair of blocks the product of the two time ratios `a / b` cancels that
-/// order; `b` wins when the median product is below 1 (a block slowed by a preemption moves
-/// one product, not the median). With no pilot blocks (under [`PILOT_MIN`] rays), `a`.
+/// each alike; the one with the smaller total time wins. Totals, not a median of ratios:
+/// blocks differ in cost (a block of camera rays that all miss costs a tenth of one whose
+/// rays hit the mesh, and the engines rank differently on the two), so the blocks that cost
+/// most must weigh most. Each block's time counts at most [`PILOT_CLAMP`] times the other
+/// engine's on the same block, so a block slowed by a preemption does not decide. With no
+/// pilot blocks (under [`PILOT_MIN`] rays), `a`.
 pub fn pilot(
     [a, b]: [Engine; 2],
     n: usize,
@@ -289,20 +292,22 @@ pub fn pilot(
     let mut time = |e: Engine, r: std::ops::Range<usize>| {
         let start = std::time::Instant::now();
         run(e, r);
-        start.elapsed().as_secs_f64().max(1e-9)
+        start.elapsed().as_secs_f64()
     };
-    let mut products: Vec<f64> = blocks
-        .chunks(2)
-        .map(|pair| {
-            let (ta0, tb0) = (time(a, pair[0].clone()), time(b, pair[0].clone()));
-            let (tb1, ta1) = (time(b, pair[1].clone()), time(a, pair[1].clone()));
-            (ta0 / tb0) * (ta1 / tb1)
-        })
-        .collect();
-    products.sort_unstable_by(f64::total_cmp);
-    if products[products.len() / 2] > 1.0 {
-        b
-    } else {
-        a
+    let (mut total_a, mut total_b) = (0.0, 0.0);
+    for (k, block) in blocks.into_iter().enumerate() {
+        let (ta, tb) = if k % 2 == 0 {
+            let ta = time(a, block.clone());
+            (ta, time(b, block))
+        } else {
+            let tb = time(b, block.clone());
+            (time(a, block), tb)
+        };
+        total_a += ta.min(PILOT_CLAMP * tb);
+        total_b += tb.min(PILOT_CLAMP * ta);
     }
+    if total_b < total_a { b } else { a }
 }
+
+/// A pilot block's time counts at most this many times the other candidate's on it.
+pub const PILOT_CLAMP: f64 = 3.0;
