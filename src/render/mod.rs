@@ -1,5 +1,6 @@
 //! Rendering: the world (scene + geometry + BVH), stages, tiles, statistics.
 
+pub mod aov;
 pub mod part;
 pub mod queues;
 pub mod recursive;
