@@ -256,6 +256,19 @@ struct Rows<'a> {
     aovs: Option<&'a AovImages>,
 }
 
+/// Float samples into `dst`, little-endian, as f16 (`half`) or f32.
+fn put(dst: &mut [u8], samples: impl Iterator<Item = f32>, half: bool) {
+    if half {
+        for (d, x) in dst.chunks_exact_mut(2).zip(samples) {
+            d.copy_from_slice(&f16::from_f32(x).to_le_bytes());
+        }
+    } else {
+        for (d, x) in dst.chunks_exact_mut(4).zip(samples) {
+            d.copy_from_slice(&x.to_le_bytes());
+        }
+    }
+}
+
 /// One block's bytes in the file's layout: for each row, each channel's samples in turn,
 /// little-endian (f16 or f32; `id` u32).
 fn encode_block(
@@ -275,42 +288,46 @@ fn encode_block(
             }
         })
         .sum();
-    let mut out = Vec::with_capacity((r1 - r0) * width * size);
-    let put = |out: &mut Vec<u8>, v: &mut dyn Iterator<Item = f32>| {
-        if half {
-            out.extend(v.flat_map(|x| f16::from_f32(x).to_le_bytes()));
-        } else {
-            out.extend(v.flat_map(f32::to_le_bytes));
-        }
+    let mut out = vec![0u8; (r1 - r0) * width * size];
+    let mut at = 0;
+    // the next `width` samples of a channel, `bytes` each
+    let mut take = |bytes: usize| {
+        at += width * bytes;
+        at - width * bytes..at
     };
     for r in r0..r1 {
         let span = r * width..(r + 1) * width;
         for &(_, source) in layout {
             let a = rows.aovs;
+            let bytes = if half && !matches!(source, Source::Id) {
+                2
+            } else {
+                4
+            };
+            let dst = &mut out[take(bytes)];
             match source {
-                Source::Beauty(c) => put(
-                    &mut out,
-                    &mut rows.beauty[span.clone()].iter().map(|p| p[c]),
-                ),
+                Source::Beauty(c) => put(dst, rows.beauty[span.clone()].iter().map(|p| p[c]), half),
                 Source::Albedo(c) => {
                     let v = a
                         .and_then(|a| a.albedo.as_deref())
                         .expect("albedo captured");
-                    put(&mut out, &mut v[span.clone()].iter().map(|p| p[c]))
+                    put(dst, v[span.clone()].iter().map(|p| p[c]), half)
                 }
                 Source::Normal(c) => {
                     let v = a
                         .and_then(|a| a.normal.as_deref())
                         .expect("normal captured");
-                    put(&mut out, &mut v[span.clone()].iter().map(|p| p[c]))
+                    put(dst, v[span.clone()].iter().map(|p| p[c]), half)
                 }
                 Source::Depth => {
                     let v = a.and_then(|a| a.depth.as_deref()).expect("depth captured");
-                    put(&mut out, &mut v[span.clone()].iter().copied())
+                    put(dst, v[span.clone()].iter().copied(), half)
                 }
                 Source::Id => {
                     let v = a.and_then(|a| a.id.as_deref()).expect("id captured");
-                    out.extend(v[span.clone()].iter().flat_map(|i| i.to_le_bytes()));
+                    for (d, i) in dst.chunks_exact_mut(4).zip(&v[span.clone()]) {
+                        d.copy_from_slice(&i.to_le_bytes());
+                    }
                 }
             }
         }
