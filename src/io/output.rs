@@ -36,7 +36,7 @@ impl Default for ExrOptions {
 }
 
 /// The EXR compressions whitted writes (all lossless). ZIP is the default: through libdeflate
-/// it costs a fraction of PIZ's CPU time for files a few per cent larger (docs/output.md).
+/// it costs less CPU time than PIZ for files at most 15% larger (docs/output.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExrCompression {
     /// Raw samples.
@@ -51,9 +51,9 @@ pub enum ExrCompression {
     Piz,
 }
 
-/// libdeflate's compression level for ZIP and ZIPS blocks: level 1 is its fastest, and on
-/// renders within a few per cent of the size of level 6 (docs/output.md).
-pub const ZIP_LEVEL: i32 = 1;
+/// libdeflate's compression level for ZIP and ZIPS blocks: the fastest level whose files stay
+/// within 15% of PIZ's on `phong` at 1080p and 4K (level 1 is 23% larger at 4K; docs/output.md).
+pub const ZIP_LEVEL: i32 = 4;
 
 impl ExrCompression {
     /// The names `--exr-compression` takes, the default first.
@@ -815,6 +815,55 @@ mod tests {
                 };
                 let want: Vec<Vec3> = rows.iter().copied().map(round).collect();
                 assert_eq!(layer.channel_data.pixels, want, "{compression:?} {half}");
+            }
+        }
+    }
+
+    /// A block that deflate cannot shrink is stored raw (the size readers take for
+    /// uncompressed), one that it can is smaller; both read back bit for bit.
+    #[test]
+    fn zip_blocks_that_do_not_shrink_are_stored_raw() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut noise = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            f32::from_bits((x as u32 & 0x807F_FFFF) | 0x3F00_0000) // finite, in +-[0.5, 1)
+        };
+        // random bytes: deflate adds its headers, so the block is stored raw
+        let noisy: Vec<u8> = (0..4096).map(|_| noise().to_bits() as u8).collect();
+        assert_eq!(zip_block(&noisy), noisy);
+        let flat = vec![7u8; 4096];
+        assert!(zip_block(&flat).len() < 100);
+
+        let d = dir("zip-raw");
+        let (w, h) = (64u32, 40u32);
+        for pixels in [
+            (0..w * h)
+                .map(|_| Vec3::new(noise(), noise(), noise()))
+                .collect::<Vec<_>>(),
+            vec![Vec3::new(0.1, 0.12, 0.16); (w * h) as usize],
+        ] {
+            for compression in [ExrCompression::Zip, ExrCompression::Zips] {
+                let path = d.join(format!("{compression:?}.exr"));
+                let opts = ExrOptions {
+                    compression,
+                    half: false,
+                };
+                let part = PixelBounds::full(w, h);
+                write_streamed(&path, (w, h), part, opts, &mut |s| s(0, &pixels)).unwrap();
+                let img = exr::prelude::read_first_rgba_layer_from_file(
+                    &path,
+                    |res, _| vec![Vec3::ZERO; res.0 * res.1],
+                    |v: &mut Vec<Vec3>, p, (r, g, b, _): (f32, f32, f32, f32)| {
+                        v[p.1 * 64 + p.0] = Vec3::new(r, g, b)
+                    },
+                )
+                .unwrap();
+                assert_eq!(
+                    img.layer_data.channel_data.pixels, pixels,
+                    "{compression:?}"
+                );
             }
         }
     }
