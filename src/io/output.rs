@@ -695,6 +695,7 @@ mod tests {
         for (ext, compression) in [
             ("exr", ExrCompression::Piz),
             ("exr", ExrCompression::Zip),
+            ("exr", ExrCompression::Zips),
             ("exr", ExrCompression::Rle),
             ("exr", ExrCompression::None),
             ("png", ExrCompression::Piz),
