@@ -72,8 +72,8 @@ struct MergeArgs {
     /// EXR output in 16-bit floats (implied when every part is 16-bit).
     #[arg(long)]
     half: bool,
-    /// EXR compression: piz (default), zip, rle or none (all lossless).
-    #[arg(long, default_value = "piz")]
+    /// EXR compression: zip (default), zips, piz, rle or none (all lossless).
+    #[arg(long, default_value = "zip")]
     exr_compression: String,
     /// No summary line.
     #[arg(long, short = 'q')]
@@ -206,8 +206,8 @@ struct RenderArgs {
     /// EXR output in 16-bit floats instead of 32-bit.
     #[arg(long)]
     half: bool,
-    /// EXR compression: piz (default), zip, rle or none (all lossless).
-    #[arg(long, default_value = "piz")]
+    /// EXR compression: zip (default), zips, piz, rle or none (all lossless).
+    #[arg(long, default_value = "zip")]
     exr_compression: String,
 }
 
@@ -503,21 +503,8 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let part_arg = args.part()?;
     let part = part_arg.bounds(w, h).map_err(Error::Usage)?;
     let exr = parse_exr_options(args.half, &args.exr_compression)?;
-    if let (Some(list), Some(_)) = (&args.aov, &aovs) {
-        // The AOV layers are captured over the whole image and written by their own EXR writer.
-        if !part_arg.is_full() {
-            return Err(Error::Usage(format!(
-                "--aov {list}: AOV layers are written for the whole image only, not with --crop, --pixel-bounds or --tile"
-            )));
-        }
-        if exr != whitted::io::output::ExrOptions::default() {
-            return Err(Error::Usage(format!(
-                "--aov {list}: the AOV EXR is written in 32-bit floats with its own compression; --half and --exr-compression do not apply"
-            )));
-        }
-    }
-
     // A value set by -D names the argument too.
+    let load_start = std::time::Instant::now();
     let (mut scene, warnings) =
         build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
             .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?;
@@ -534,6 +521,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         spp,
         engine,
     };
+    let load_time = load_start.elapsed();
     let world = World::new(scene);
     // what is rendered: the image, or a part of it
     let what = if part_arg.is_full() {
@@ -562,45 +550,37 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         );
         b
     };
-    let stats = match &aovs {
-        // Rows stream into the file as bands finish; a failed render leaves no file behind.
-        None => {
-            let mut stats = None;
-            let wrote = whitted::io::output::write_streamed(&out, (w, h), part, exr, &mut |sink| {
-                let s =
-                    whitted::render::render_rows(&world, &settings, part, &|n| bar.inc(n), sink)?;
-                let over = s.budget_error(&world, &settings);
-                stats = Some(s);
-                match over {
-                    None => Ok(()),
-                    Some(msg) => Err(Error::scene(&path, msg)),
-                }
-            });
-            bar.finish_and_clear();
-            wrote?;
-            stats.expect("the render ran")
-        }
-        // The beauty image in memory, then one EXR with the AOV layers beside it (written
-        // through a temporary file too).
-        Some(aovs) => {
-            let (image, stats) = whitted::render::render(&world, &settings, &|n| bar.inc(n));
-            bar.finish_and_clear();
-            if let Some(msg) = stats.budget_error(&world, &settings) {
-                return Err(Error::scene(&path, msg));
+    // Rows stream into the file as bands finish, AOV layers (if any) captured band by band
+    // beside them; a failed render leaves no file behind.
+    let times = whitted::io::output::OutputTimes::default();
+    let capture = |b| whitted::render::aov::capture_part(&world, aovs.as_deref().unwrap_or(&[]), b);
+    let aov_source = aovs.as_deref().map(|aovs| whitted::io::output::AovSource {
+        aovs,
+        capture: &capture,
+    });
+    let mut stats = None;
+    let write_start = std::time::Instant::now();
+    let wrote = whitted::io::output::write_streamed_with(
+        &out,
+        (w, h),
+        part,
+        exr,
+        aov_source.as_ref(),
+        &times,
+        &mut |sink| {
+            let s = whitted::render::render_rows(&world, &settings, part, &|n| bar.inc(n), sink)?;
+            let over = s.budget_error(&world, &settings);
+            stats = Some(s);
+            match over {
+                None => Ok(()),
+                Some(msg) => Err(Error::scene(&path, msg)),
             }
-            let aov_time = std::time::Instant::now();
-            let layers = whitted::aov::capture(&world, aovs);
-            if !args.quiet {
-                eprintln!(
-                    "AOVs {} captured in {:.3} s",
-                    aovs.iter().map(|a| a.name()).collect::<Vec<_>>().join(","),
-                    aov_time.elapsed().as_secs_f64()
-                );
-            }
-            whitted::io::aov::save_exr_with_aovs(&image, &layers, &out)?;
-            stats
-        }
-    };
+        },
+    );
+    bar.finish_and_clear();
+    wrote?;
+    let stats = stats.expect("the render ran");
+    let write_wall = write_start.elapsed();
     if !args.quiet {
         let r = &stats.rays;
         let total = r.total();
@@ -621,8 +601,36 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     }
     if args.stats {
         print_stats(&world, &stats, engine);
+        print_times(load_time, &stats, &times, write_wall);
     }
     Ok(())
+}
+
+/// `--stats`, where the time went: loading (scene file, meshes, textures), rendering, and the
+/// output's thread time (layout and compression, AOV capture, writing) and the wall time it
+/// added after the render's last band.
+fn print_times(
+    load: std::time::Duration,
+    stats: &whitted::render::RenderStats,
+    times: &whitted::io::output::OutputTimes,
+    write_wall: std::time::Duration,
+) {
+    let secs = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
+    println!(
+        "load              {:.1} ms (scene, meshes, textures)",
+        load.as_secs_f64() * 1e3
+    );
+    println!(
+        "trace/shade       {:.3} s wall (the render, output overlapping it)",
+        stats.time.as_secs_f64()
+    );
+    println!(
+        "output            {:.3} thread-s layout+compression, {:.3} AOVs, {:.3} writing; {:.3} s wall after the last band",
+        secs(&times.encode_ns),
+        secs(&times.aov_ns),
+        secs(&times.write_ns),
+        write_wall.saturating_sub(stats.time).as_secs_f64()
+    );
 }
 
 /// `--stats`: BVH build, rays per queue, time and Mrays/s per phase (thread time, summed over

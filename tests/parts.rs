@@ -196,7 +196,7 @@ fn four_tiles_of_phong_merge_to_the_full_render_and_three_name_the_gap() {
         v["data_window"],
         serde_json::json!({"x": [0, 1024], "y": [384, 576]})
     );
-    assert_eq!(v["compression"], "piz");
+    assert_eq!(v["compression"], "zip16");
 }
 
 /// Any part, cut anywhere (across tiles, one pixel wide, at the image's ragged edge), renders
@@ -397,7 +397,7 @@ fn crops_and_pixel_bounds_as_files_and_mixed_merges() {
 }
 
 /// `--half` parts merge bit for bit into the `--half` full render (the merge keeps 16 bits),
-/// and ZIP / RLE / uncompressed files hold the same pixels as PIZ.
+/// and ZIPS / PIZ / RLE / uncompressed files hold the same pixels as the default ZIP.
 #[test]
 fn half_and_every_compression_hold_the_same_pixels() {
     let size = ["--width", "96", "--height", "64"];
@@ -456,7 +456,7 @@ fn half_and_every_compression_hold_the_same_pixels() {
     let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
     assert_eq!(v["bits"], 16);
 
-    let zip = tmp("c-piz.exr");
+    let zip = tmp("c-default.exr");
     run(&[
         &["render", "phong", "-q", "-o", zip.to_str().unwrap()][..],
         &size,
@@ -470,7 +470,7 @@ fn half_and_every_compression_hold_the_same_pixels() {
         .map(|p| p.map(|c| exr::prelude::f16::from_f32(c).to_f32()))
         .collect();
     assert_eq!(bits(&h.pixels), bits(&rounded));
-    for c in ["zip", "rle", "none"] {
+    for c in ["zip", "zips", "piz", "rle", "none"] {
         let p = tmp(&format!("c-{c}.exr"));
         run(&[
             &[

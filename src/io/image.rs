@@ -290,7 +290,7 @@ fn face_file(dir: &Path, name: &str) -> Result<PathBuf> {
     ))
 }
 
-/// Write a render: `.exr` as linear float RGB (PIZ-compressed 32-bit, see
+/// Write a render: `.exr` as linear float RGB (ZIP-compressed 32-bit, see
 /// [`crate::io::output`]), `.png` clamped and sRGB-encoded 8-bit; through a temporary file, so
 /// a failed write leaves what `path` held.
 pub fn save_image(image: &Image, path: &Path) -> Result<()> {

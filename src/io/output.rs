@@ -1,7 +1,10 @@
 //! Writing renders as they are made: rows stream into `.exr` (display and data windows,
-//! PIZ/ZIP/RLE, f32 or f16) or `.png` (sRGB 8-bit), always through a temporary file beside the
-//! target that is renamed into place only once complete.
+//! ZIP/ZIPS/PIZ/RLE/none, f32 or f16, AOV layers beside the beauty image) or `.png` (sRGB
+//! 8-bit), always through a temporary file beside the target that is renamed into place only
+//! once complete. EXR blocks are compressed as parallel tasks while the render goes on, and
+//! written in order as they finish.
 
+use crate::aov::{Aov, AovImages};
 use crate::error::{Error, Result};
 use crate::image::{PixelBounds, srgb8};
 use exr::prelude::f16;
@@ -10,7 +13,9 @@ use rayon::prelude::*;
 use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
 
 /// How EXR pixels are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -24,36 +29,42 @@ pub struct ExrOptions {
 impl Default for ExrOptions {
     fn default() -> Self {
         ExrOptions {
-            compression: ExrCompression::Piz,
+            compression: ExrCompression::Zip,
             half: false,
         }
     }
 }
 
-/// The EXR compressions whitted writes (all lossless). PIZ is the default: on 32-bit renders
-/// it made files 13-17% smaller than ZIP and wrote them in 60% of the CPU time (README,
-/// "Output"); ZIP makes the smaller `--half` files.
+/// The EXR compressions whitted writes (all lossless). ZIP is the default: through libdeflate
+/// it costs less CPU time than PIZ for files at most 15% larger (docs/output.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExrCompression {
     /// Raw samples.
     None,
     /// Run-length encoding of bytes, one scan line per block: no gain on float renders.
     Rle,
-    /// zlib over blocks of 16 scan lines.
+    /// zlib over single scan lines (OpenEXR's ZIPS), through libdeflate.
+    Zips,
+    /// zlib over blocks of 16 scan lines (OpenEXR's ZIP), through libdeflate.
     Zip,
-    /// wavelet + Huffman over blocks of 32 scan lines.
+    /// wavelet + Huffman over blocks of 32 scan lines (the `exr` crate's encoder).
     Piz,
 }
 
+/// libdeflate's compression level for ZIP and ZIPS blocks: the fastest level whose files stay
+/// within 15% of PIZ's on `phong` at 1080p and 4K (level 1 is 23% larger at 4K; docs/output.md).
+pub const ZIP_LEVEL: i32 = 4;
+
 impl ExrCompression {
     /// The names `--exr-compression` takes, the default first.
-    pub const NAMES: [&'static str; 4] = ["piz", "zip", "rle", "none"];
+    pub const NAMES: [&'static str; 5] = ["zip", "zips", "piz", "rle", "none"];
 
     /// The compression of a name in [`Self::NAMES`].
     pub fn from_name(name: &str) -> Option<Self> {
         Some(match name {
             "none" => ExrCompression::None,
             "rle" => ExrCompression::Rle,
+            "zips" => ExrCompression::Zips,
             "zip" => ExrCompression::Zip,
             "piz" => ExrCompression::Piz,
             _ => return None,
@@ -65,9 +76,43 @@ impl ExrCompression {
         match self {
             ExrCompression::None => C::Uncompressed,
             ExrCompression::Rle => C::RLE,
+            ExrCompression::Zips => C::ZIP1,
             ExrCompression::Zip => C::ZIP16,
             ExrCompression::Piz => C::PIZ,
         }
+    }
+
+    /// Compressed by whitted's own ZIP encoder rather than the `exr` crate's.
+    fn is_zip(self) -> bool {
+        matches!(self, ExrCompression::Zip | ExrCompression::Zips)
+    }
+}
+
+/// AOV layers written beside the beauty image of a streamed EXR: which, and how to capture
+/// them over a rectangle of the image (called once per batch of rows, with the part's
+/// columns; it returns an [`AovImages`] of the rectangle's size).
+pub struct AovSource<'a> {
+    /// The layers, each written as the channels of [`crate::io::aov::CHANNELS`].
+    pub aovs: &'a [Aov],
+    /// Capture the layers over a rectangle of the image.
+    pub capture: &'a (dyn Fn(PixelBounds) -> AovImages + Sync),
+}
+
+/// Where the time of a streamed write went (nanoseconds, summed over threads): laying out
+/// and compressing blocks, capturing AOVs, writing chunks.
+#[derive(Debug, Default)]
+pub struct OutputTimes {
+    /// Laying samples out in the file's order and compressing them.
+    pub encode_ns: AtomicU64,
+    /// Capturing AOV layers ([`AovSource::capture`]).
+    pub aov_ns: AtomicU64,
+    /// Handing compressed chunks to the file (in order, under a lock).
+    pub write_ns: AtomicU64,
+}
+
+impl OutputTimes {
+    fn add(counter: &AtomicU64, since: Instant) {
+        counter.fetch_add(since.elapsed().as_nanos() as u64, Ordering::Relaxed);
     }
 }
 
@@ -83,9 +128,31 @@ pub type RowSink<'a> = dyn FnMut(u32, &[Vec3]) -> Result<()> + 'a;
 /// and no temporary file behind.
 pub fn write_streamed(
     path: &Path,
+    size: (u32, u32),
+    part: PixelBounds,
+    exr: ExrOptions,
+    produce: &mut dyn FnMut(&mut RowSink) -> Result<()>,
+) -> Result<()> {
+    write_streamed_with(
+        path,
+        size,
+        part,
+        exr,
+        None,
+        &OutputTimes::default(),
+        produce,
+    )
+}
+
+/// [`write_streamed`] with AOV layers beside the beauty image (`.exr` only: with `aovs` a
+/// `.png` path is an error), adding where the time went to `times`.
+pub fn write_streamed_with(
+    path: &Path,
     (width, height): (u32, u32),
     part: PixelBounds,
     exr: ExrOptions,
+    aovs: Option<&AovSource>,
+    times: &OutputTimes,
     produce: &mut dyn FnMut(&mut RowSink) -> Result<()>,
 ) -> Result<()> {
     if part.is_empty() || !PixelBounds::full(width, height).contains(&part) {
@@ -96,8 +163,12 @@ pub fn write_streamed(
     }
     match crate::io::extension(path).as_str() {
         "exr" => write_atomically(path, |file| {
-            write_exr(file, path, (width, height), part, exr, produce)
+            write_exr(file, path, (width, height), part, exr, aovs, times, produce)
         }),
+        "png" if aovs.is_some() => Err(Error::Usage(format!(
+            "{}: AOV layers need an .exr file",
+            path.display()
+        ))),
         "png" => write_atomically(path, |file| write_png(file, path, part, produce)),
         _ => Err(Error::Usage(format!(
             "{}: unknown output format (use .png or .exr)",
@@ -142,34 +213,226 @@ pub fn write_atomically(
     result
 }
 
-/// Scan-line blocks of `part` compressed in parallel and written in increasing y.
-fn write_exr<W: Write + Seek>(
+/// Where one channel's samples come from.
+#[derive(Clone, Copy, Debug)]
+enum Source {
+    /// The beauty image's component (0 R, 1 G, 2 B).
+    Beauty(usize),
+    Albedo(usize),
+    Normal(usize),
+    Depth,
+    Id,
+}
+
+/// The file's channels, in its (byte-wise sorted) order: name and source.
+fn channel_layout(aovs: &[Aov]) -> Vec<(&'static str, Source)> {
+    use crate::io::aov::CHANNELS;
+    let mut v = vec![
+        ("R", Source::Beauty(0)),
+        ("G", Source::Beauty(1)),
+        ("B", Source::Beauty(2)),
+    ];
+    for &a in aovs {
+        let names = CHANNELS[a as usize].1;
+        for (k, &name) in names.iter().enumerate() {
+            v.push((
+                name,
+                match a {
+                    Aov::Albedo => Source::Albedo(k),
+                    Aov::Normal => Source::Normal(k),
+                    Aov::Depth => Source::Depth,
+                    Aov::Id => Source::Id,
+                },
+            ));
+        }
+    }
+    v.sort_by(|a, b| a.0.cmp(b.0));
+    v
+}
+
+/// The rows of one batch: beauty pixels and, with AOVs, the layers over the same rows.
+struct Rows<'a> {
+    beauty: &'a [Vec3],
+    aovs: Option<&'a AovImages>,
+}
+
+/// Float samples into `dst`, little-endian, as f16 (`half`) or f32.
+fn put(dst: &mut [u8], samples: impl Iterator<Item = f32>, half: bool) {
+    if half {
+        for (d, x) in dst.chunks_exact_mut(2).zip(samples) {
+            d.copy_from_slice(&f16::from_f32(x).to_le_bytes());
+        }
+    } else {
+        for (d, x) in dst.chunks_exact_mut(4).zip(samples) {
+            d.copy_from_slice(&x.to_le_bytes());
+        }
+    }
+}
+
+/// One block's bytes in the file's layout: for each row, each channel's samples in turn,
+/// little-endian (f16 or f32; `id` u32).
+fn encode_block(
+    rows: &Rows,
+    (r0, r1): (usize, usize),
+    width: usize,
+    layout: &[(&str, Source)],
+    half: bool,
+) -> Vec<u8> {
+    let size: usize = layout
+        .iter()
+        .map(|(_, s)| {
+            if half && !matches!(s, Source::Id) {
+                2
+            } else {
+                4
+            }
+        })
+        .sum();
+    let mut out = vec![0u8; (r1 - r0) * width * size];
+    let mut at = 0;
+    // the next `width` samples of a channel, `bytes` each
+    let mut take = |bytes: usize| {
+        at += width * bytes;
+        at - width * bytes..at
+    };
+    for r in r0..r1 {
+        let span = r * width..(r + 1) * width;
+        for &(_, source) in layout {
+            let a = rows.aovs;
+            let bytes = if half && !matches!(source, Source::Id) {
+                2
+            } else {
+                4
+            };
+            let dst = &mut out[take(bytes)];
+            match source {
+                Source::Beauty(c) => put(dst, rows.beauty[span.clone()].iter().map(|p| p[c]), half),
+                Source::Albedo(c) => {
+                    let v = a
+                        .and_then(|a| a.albedo.as_deref())
+                        .expect("albedo captured");
+                    put(dst, v[span.clone()].iter().map(|p| p[c]), half)
+                }
+                Source::Normal(c) => {
+                    let v = a
+                        .and_then(|a| a.normal.as_deref())
+                        .expect("normal captured");
+                    put(dst, v[span.clone()].iter().map(|p| p[c]), half)
+                }
+                Source::Depth => {
+                    let v = a.and_then(|a| a.depth.as_deref()).expect("depth captured");
+                    put(dst, v[span.clone()].iter().copied(), half)
+                }
+                Source::Id => {
+                    let v = a.and_then(|a| a.id.as_deref()).expect("id captured");
+                    for (d, i) in dst.chunks_exact_mut(4).zip(&v[span.clone()]) {
+                        d.copy_from_slice(&i.to_le_bytes());
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+thread_local! {
+    /// Each thread's libdeflate compressor (its tables are reused from block to block).
+    static DEFLATE: std::cell::RefCell<libdeflater::Compressor> = std::cell::RefCell::new(
+        libdeflater::Compressor::new(
+            libdeflater::CompressionLvl::new(ZIP_LEVEL).expect("a valid libdeflate level"),
+        ),
+    );
+}
+
+/// OpenEXR's ZIP (and ZIPS) block: the little-endian bytes split into the even-indexed ones
+/// then the odd, each byte replaced by its difference from the one before plus 128 (mod 256),
+/// then zlib. A block that would not shrink is stored raw, as OpenEXR does (a reader takes a
+/// block of the raw size as uncompressed).
+pub fn zip_block(raw: &[u8]) -> Vec<u8> {
+    let n = raw.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let half = n.div_ceil(2);
+    let mut split = vec![0u8; n];
+    let (even, odd) = split.split_at_mut(half);
+    for ((pair, e), o) in raw.chunks_exact(2).zip(even.iter_mut()).zip(odd.iter_mut()) {
+        *e = pair[0];
+        *o = pair[1];
+    }
+    if n % 2 == 1 {
+        even[half - 1] = raw[n - 1];
+    }
+    let mut predicted = vec![0u8; n];
+    predicted[0] = split[0];
+    for ((d, &cur), &prev) in predicted[1..]
+        .iter_mut()
+        .zip(&split[1..])
+        .zip(&split[..n - 1])
+    {
+        *d = cur.wrapping_sub(prev).wrapping_add(128);
+    }
+    DEFLATE.with(|c| {
+        let mut c = c.borrow_mut();
+        let mut out = vec![0u8; c.zlib_compress_bound(n)];
+        match c.zlib_compress(&predicted, &mut out) {
+            Ok(len) if len < n => {
+                out.truncate(len);
+                out
+            }
+            _ => raw.to_vec(),
+        }
+    })
+}
+
+/// The compressed chunks waiting to be written in order, and the writer they go to.
+struct InOrder<'w, C> {
+    chunks: &'w mut C,
+    ready: std::collections::BTreeMap<usize, exr::block::chunk::Chunk>,
+    next: usize,
+    error: Option<exr::error::Error>,
+}
+
+/// Scan-line blocks of `part` laid out and compressed as parallel tasks (while `produce`
+/// goes on rendering) and written in increasing y as they finish.
+#[allow(clippy::too_many_arguments)]
+fn write_exr<W: Write + Seek + Send>(
     out: W,
     path: &Path,
     (width, height): (u32, u32),
     part: PixelBounds,
     opts: ExrOptions,
+    aovs: Option<&AovSource>,
+    times: &OutputTimes,
     produce: &mut dyn FnMut(&mut RowSink) -> Result<()>,
 ) -> Result<()> {
+    use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
     use exr::block::{BlockIndex, UncompressedBlock, writer::ChunksWriter};
     use exr::math::Vec2;
     use exr::meta::attribute::{ChannelDescription, IntegerBounds, LineOrder, SampleType};
     use exr::meta::{BlockDescription, header::Header};
 
-    let sample = if opts.half {
+    let layout = channel_layout(aovs.map_or(&[], |a| a.aovs));
+    let float = if opts.half {
         SampleType::F16
     } else {
         SampleType::F32
     };
-    // channels in the file's (alphabetical) order
-    let channels = ["B", "G", "R"]
-        .map(|name| ChannelDescription::named(name, sample))
-        .into_iter()
+    let channels = layout
+        .iter()
+        .map(|&(name, source)| {
+            let sample = match source {
+                Source::Id => SampleType::U32,
+                _ => float,
+            };
+            ChannelDescription::named(name, sample)
+        })
         .collect();
     let (pw, ph) = (part.width() as usize, part.height() as usize);
+    let compression = opts.compression;
     let mut header = Header::new("rgb".into(), (pw, ph), channels)
         .with_encoding(
-            opts.compression.to_exr(),
+            compression.to_exr(),
             BlockDescription::ScanLines,
             LineOrder::Increasing,
         )
@@ -179,7 +442,7 @@ fn write_exr<W: Write + Seek>(
         ))
         .with_position(Vec2(part.x0 as i32, part.y0 as i32));
     header.own_attributes.layer_name = None;
-    let lines = opts.compression.to_exr().scan_lines_per_block();
+    let lines = compression.to_exr().scan_lines_per_block();
     let exr_err = |e: exr::error::Error| Error::image(path, format!("cannot write EXR: {e}"));
 
     // our own error (from `produce`), carried through the exr crate's closure
@@ -189,79 +452,155 @@ fn write_exr<W: Write + Seek>(
         std::iter::once(header).collect(),
         true,
         |meta, chunks| {
-            // part rows `done..` are not written yet; those that do not fill a block wait in
-            // `pending`
-            let mut pending: Vec<Vec3> = Vec::new();
-            let mut done = 0usize;
             let headers = &meta.headers;
-            // Encode and compress the blocks of `lines` rows at the front of `src` (part rows
-            // from `done` on; with `last`, a short final block too) in parallel, write them in
-            // order; the number of rows written.
-            let mut emit = |src: &[Vec3], done: usize, last: bool| -> exr::error::Result<usize> {
-                let rows = src.len() / pw;
-                let blocks = if last {
-                    rows.div_ceil(lines)
-                } else {
-                    rows / lines
-                };
-                let compressed: Vec<exr::error::Result<exr::block::chunk::Chunk>> = (0..blocks)
-                    .into_par_iter()
-                    .map(|b| {
-                        let r0 = b * lines;
-                        let n = lines.min(rows - r0);
-                        let index = BlockIndex {
-                            layer: 0,
-                            pixel_position: Vec2(0, done + r0),
-                            pixel_size: Vec2(pw, n),
-                            level: Vec2(0, 0),
-                        };
-                        let data = encode_lines(&src[r0 * pw..(r0 + n) * pw], pw, opts.half);
-                        UncompressedBlock { index, data }.compress_to_chunk(headers)
+            let state = Mutex::new(InOrder {
+                chunks,
+                ready: Default::default(),
+                next: 0,
+                error: None,
+            });
+            // Compress block `k` (its bytes laid out) and write every chunk that is next in
+            // order.
+            let compress_and_write = |k: usize, rows: usize, data: Vec<u8>| {
+                let t = Instant::now();
+                let y = part.y0 as i32 + (k * lines) as i32;
+                let chunk = if compression.is_zip() {
+                    Ok(Chunk {
+                        layer_index: 0,
+                        compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {
+                            y_coordinate: y,
+                            compressed_pixels_le: zip_block(&data),
+                        }),
                     })
-                    .collect();
-                for (b, chunk) in compressed.into_iter().enumerate() {
-                    chunks.write_chunk(done / lines + b, chunk?)?;
-                }
-                Ok((blocks * lines).min(rows))
-            };
-            let mut exr_error = None;
-            let produced = produce(&mut |y, rows| {
-                debug_assert_eq!(rows.len() % pw, 0);
-                let expected = part.y0 as usize + done + pending.len() / pw;
-                if y as usize != expected {
-                    return Err(Error::image(
-                        path,
-                        format!("rows from {y} given where {expected} was next"),
-                    ));
-                }
-                let written = if pending.is_empty() {
-                    // straight from the caller's rows; the rest of a block waits
-                    emit(rows, done, false).inspect(|&n| pending.extend_from_slice(&rows[n * pw..]))
                 } else {
-                    pending.extend_from_slice(rows);
-                    emit(&pending, done, false).inspect(|&n| {
-                        pending.drain(..n * pw);
-                    })
+                    let index = BlockIndex {
+                        layer: 0,
+                        pixel_position: Vec2(0, k * lines),
+                        pixel_size: Vec2(pw, rows),
+                        level: Vec2(0, 0),
+                    };
+                    UncompressedBlock { index, data }.compress_to_chunk(headers)
                 };
-                match written {
-                    Ok(n) => {
-                        done += n;
-                        Ok(())
+                OutputTimes::add(&times.encode_ns, t);
+                let t = Instant::now();
+                let mut guard = state.lock().unwrap_or_else(|e| e.into_inner());
+                let s = &mut *guard;
+                match chunk {
+                    Ok(c) => {
+                        s.ready.insert(k, c);
                     }
                     Err(e) => {
-                        let msg = format!("cannot write EXR: {e}");
-                        exr_error = Some(e);
-                        Err(Error::image(path, msg))
+                        s.error.get_or_insert(e);
                     }
+                }
+                while let Some(c) = s.ready.remove(&s.next) {
+                    if s.error.is_none()
+                        && let Err(e) = s.chunks.write_chunk(s.next, c)
+                    {
+                        s.error = Some(e);
+                    }
+                    s.next += 1;
+                }
+                OutputTimes::add(&times.write_ns, t);
+            };
+            let write_error = |state: &Mutex<InOrder<_>>| {
+                let s = state.lock().unwrap_or_else(|e| e.into_inner());
+                s.error.as_ref().map(|e| format!("cannot write EXR: {e}"))
+            };
+
+            let mut produced = Ok(());
+            let mut rendered = 0usize;
+            rayon::in_place_scope(|scope| {
+                // part rows `done..` are not laid out yet; those that do not fill a block
+                // wait in `pending`
+                let mut pending: Vec<Vec3> = Vec::new();
+                let mut done = 0usize;
+                // Lay out the blocks of `lines` rows at the front of `src` (part rows from
+                // `done` on; with `last`, a short final block too) in parallel and hand each
+                // to a task that compresses and writes it; the number of rows taken.
+                let emit = |src: &[Vec3], done: usize, last: bool| -> usize {
+                    let rows = src.len() / pw;
+                    let blocks = if last {
+                        rows.div_ceil(lines)
+                    } else {
+                        rows / lines
+                    };
+                    let taken = (blocks * lines).min(rows);
+                    if taken == 0 {
+                        return 0;
+                    }
+                    let layers = aovs.map(|a| {
+                        let t = Instant::now();
+                        let y0 = part.y0 + done as u32;
+                        let img = (a.capture)(PixelBounds {
+                            x0: part.x0,
+                            x1: part.x1,
+                            y0,
+                            y1: y0 + taken as u32,
+                        });
+                        OutputTimes::add(&times.aov_ns, t);
+                        img
+                    });
+                    let batch = Rows {
+                        beauty: &src[..taken * pw],
+                        aovs: layers.as_ref(),
+                    };
+                    let laid_out: Vec<Vec<u8>> = (0..blocks)
+                        .into_par_iter()
+                        .map(|b| {
+                            let t = Instant::now();
+                            let r0 = b * lines;
+                            let rows = (r0, (r0 + lines).min(rows));
+                            let data = encode_block(&batch, rows, pw, &layout, opts.half);
+                            OutputTimes::add(&times.encode_ns, t);
+                            data
+                        })
+                        .collect();
+                    for (b, data) in laid_out.into_iter().enumerate() {
+                        let k = done / lines + b;
+                        let n = lines.min(rows - b * lines);
+                        let task = &compress_and_write;
+                        scope.spawn(move |_| task(k, n, data));
+                    }
+                    taken
+                };
+                produced = produce(&mut |y, rows| {
+                    debug_assert_eq!(rows.len() % pw, 0);
+                    let expected = part.y0 as usize + done + pending.len() / pw;
+                    if y as usize != expected {
+                        return Err(Error::image(
+                            path,
+                            format!("rows from {y} given where {expected} was next"),
+                        ));
+                    }
+                    if let Some(msg) = write_error(&state) {
+                        return Err(Error::image(path, msg));
+                    }
+                    let n = if pending.is_empty() {
+                        // straight from the caller's rows; the rest of a block waits
+                        let n = emit(rows, done, false);
+                        pending.extend_from_slice(&rows[n * pw..]);
+                        n
+                    } else {
+                        pending.extend_from_slice(rows);
+                        let n = emit(&pending, done, false);
+                        pending.drain(..n * pw);
+                        n
+                    };
+                    done += n;
+                    Ok(())
+                });
+                rendered = done + pending.len() / pw;
+                // only the part's last block may be short (the exr crate sizes a block from
+                // its position; PIZ indexes out of range on a short one anywhere else)
+                if produced.is_ok() && rendered == ph {
+                    emit(&pending, done, true);
                 }
             });
             if let Err(e) = produced {
                 failure = Some(e);
-                return Err(exr_error.unwrap_or(exr::error::Error::Aborted));
+                return Err(exr::error::Error::Aborted);
             }
-            // only the part's last block may be short (the exr crate sizes a block from its
-            // position; PIZ indexes out of range on a short one anywhere else)
-            let rendered = done + pending.len() / pw;
             if rendered != ph {
                 failure = Some(Error::image(
                     path,
@@ -269,34 +608,17 @@ fn write_exr<W: Write + Seek>(
                 ));
                 return Err(exr::error::Error::Aborted);
             }
-            emit(&pending, done, true)?;
-            Ok(())
+            let s = state.into_inner().unwrap_or_else(|e| e.into_inner());
+            match s.error {
+                Some(e) => Err(e),
+                None => Ok(()),
+            }
         },
     );
     match (failure, written) {
         (Some(e), _) => Err(e),
         (None, r) => r.map_err(exr_err),
     }
-}
-
-/// One block's bytes: for each row, all B samples, then G, then R, native-endian.
-fn encode_lines(rows: &[Vec3], width: usize, half: bool) -> Vec<u8> {
-    let size = if half { 2 } else { 4 };
-    let mut out = Vec::with_capacity(rows.len() * 3 * size);
-    for row in rows.chunks_exact(width) {
-        for c in [2, 1, 0] {
-            if half {
-                for p in row {
-                    out.extend_from_slice(&f16::from_f32(p[c]).to_ne_bytes());
-                }
-            } else {
-                for p in row {
-                    out.extend_from_slice(&p[c].to_ne_bytes());
-                }
-            }
-        }
-    }
-    out
 }
 
 /// The part as an 8-bit sRGB PNG, rows deflated as they come (the image crate's defaults:
@@ -373,6 +695,7 @@ mod tests {
         for (ext, compression) in [
             ("exr", ExrCompression::Piz),
             ("exr", ExrCompression::Zip),
+            ("exr", ExrCompression::Zips),
             ("exr", ExrCompression::Rle),
             ("exr", ExrCompression::None),
             ("png", ExrCompression::Piz),
@@ -493,6 +816,55 @@ mod tests {
                 };
                 let want: Vec<Vec3> = rows.iter().copied().map(round).collect();
                 assert_eq!(layer.channel_data.pixels, want, "{compression:?} {half}");
+            }
+        }
+    }
+
+    /// A block that deflate cannot shrink is stored raw (the size readers take for
+    /// uncompressed), one that it can is smaller; both read back bit for bit.
+    #[test]
+    fn zip_blocks_that_do_not_shrink_are_stored_raw() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut noise = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            f32::from_bits((x as u32 & 0x807F_FFFF) | 0x3F00_0000) // finite, in +-[0.5, 1)
+        };
+        // random bytes: deflate adds its headers, so the block is stored raw
+        let noisy: Vec<u8> = (0..4096).map(|_| noise().to_bits() as u8).collect();
+        assert_eq!(zip_block(&noisy), noisy);
+        let flat = vec![7u8; 4096];
+        assert!(zip_block(&flat).len() < 100);
+
+        let d = dir("zip-raw");
+        let (w, h) = (64u32, 40u32);
+        for pixels in [
+            (0..w * h)
+                .map(|_| Vec3::new(noise(), noise(), noise()))
+                .collect::<Vec<_>>(),
+            vec![Vec3::new(0.1, 0.12, 0.16); (w * h) as usize],
+        ] {
+            for compression in [ExrCompression::Zip, ExrCompression::Zips] {
+                let path = d.join(format!("{compression:?}.exr"));
+                let opts = ExrOptions {
+                    compression,
+                    half: false,
+                };
+                let part = PixelBounds::full(w, h);
+                write_streamed(&path, (w, h), part, opts, &mut |s| s(0, &pixels)).unwrap();
+                let img = exr::prelude::read_first_rgba_layer_from_file(
+                    &path,
+                    |res, _| vec![Vec3::ZERO; res.0 * res.1],
+                    |v: &mut Vec<Vec3>, p, (r, g, b, _): (f32, f32, f32, f32)| {
+                        v[p.1 * 64 + p.0] = Vec3::new(r, g, b)
+                    },
+                )
+                .unwrap();
+                assert_eq!(
+                    img.layer_data.channel_data.pixels, pixels,
+                    "{compression:?}"
+                );
             }
         }
     }

@@ -1,5 +1,6 @@
 //! Rendering: the world (scene + geometry + BVH), stages, tiles, statistics.
 
+pub mod aov;
 pub mod part;
 pub mod queues;
 pub mod recursive;
@@ -259,24 +260,42 @@ pub fn render_rows(
         if stats.over_budget.load(Ordering::Relaxed) != 0 {
             break;
         }
-        // the batch's rows of the part, from its tiles
+        // the batch's rows of the part, from its tiles: one band of tile rows per task
         let (ry0, ry1) = (
             (batch_ty * TILE).max(part.y0),
             (batch_ty1 * TILE).min(part.y1),
         );
         rows.clear();
         rows.resize((ry1 - ry0) as usize * pw, Vec3::ZERO);
-        for (&(x0, y0), pixels) in tiles.iter().zip(&rendered) {
-            let tw = (TILE.min(full.x1 - x0)) as usize;
-            let (x1, y1) = (x0 + tw as u32, (y0 + TILE).min(full.y1));
-            let inside = part.intersect(&PixelBounds { x0, x1, y0, y1 });
-            for y in inside.y0..inside.y1 {
-                let src = (y - y0) as usize * tw + (inside.x0 - x0) as usize;
-                let dst = (y - ry0) as usize * pw + (inside.x0 - part.x0) as usize;
-                let n = inside.width() as usize;
-                rows[dst..dst + n].copy_from_slice(&pixels[src..src + n]);
-            }
+        let per_band = (tx1 - tx0) as usize;
+        let mut bands = Vec::with_capacity((batch_ty1 - batch_ty) as usize);
+        let mut rest = rows.as_mut_slice();
+        for ty in batch_ty..batch_ty1 {
+            let (y0, y1) = ((ty * TILE).max(ry0), ((ty + 1) * TILE).min(ry1));
+            let (band, tail) = rest.split_at_mut((y1 - y0) as usize * pw);
+            bands.push((y0, band));
+            rest = tail;
         }
+        bands
+            .into_par_iter()
+            .zip(
+                tiles
+                    .par_chunks(per_band)
+                    .zip(rendered.par_chunks(per_band)),
+            )
+            .for_each(|((band_y0, band), (tiles, rendered))| {
+                for (&(x0, y0), pixels) in tiles.iter().zip(rendered) {
+                    let tw = (TILE.min(full.x1 - x0)) as usize;
+                    let (x1, y1) = (x0 + tw as u32, (y0 + TILE).min(full.y1));
+                    let inside = part.intersect(&PixelBounds { x0, x1, y0, y1 });
+                    for y in inside.y0..inside.y1 {
+                        let src = (y - y0) as usize * tw + (inside.x0 - x0) as usize;
+                        let dst = (y - band_y0) as usize * pw + (inside.x0 - part.x0) as usize;
+                        let n = inside.width() as usize;
+                        band[dst..dst + n].copy_from_slice(&pixels[src..src + n]);
+                    }
+                }
+            });
         drop(rendered);
         sink(ry0, &rows)?;
     }
