@@ -283,6 +283,7 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    whitted::cpu::warn_if_slow_build();
     let result = match cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Scene { name } => cmd_scene(&name),
