@@ -186,8 +186,8 @@ fn wide(v: [f32; 3]) -> V {
     v.map(f64::from)
 }
 
-/// Barycentric weights `(b1, b2)` of the point of segment `a + s (b - a)` nearest `p`, as
-/// weights of the triangle's second and third vertex given which of them `a`/`b` are.
+/// The parameter `s` in `0..=1` of the point `a + s (b - a)` of the segment nearest `p` (0
+/// for a segment of zero length).
 fn nearest_on_segment(p: V, a: V, b: V) -> f64 {
     let ab = sub(b, a);
     let l2 = dot(ab, ab);
