@@ -78,14 +78,23 @@ pub fn slow_build_warning() -> Option<String> {
     })
 }
 
-/// Print [`slow_build_warning`] to stderr, at most once per process.
-pub fn warn_if_slow_build() {
+/// [`slow_build_warning`] the first time this or [`warn_if_slow_build`] is called in the
+/// process, `None` after: for front ends that give the warning their own way (the Python
+/// module turns it into a Python `RuntimeWarning`).
+pub fn take_slow_build_warning() -> Option<String> {
     static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        if let Some(w) = slow_build_warning() {
-            eprintln!("warning: {w}");
-        }
-    });
+    let mut out = None;
+    ONCE.call_once(|| out = slow_build_warning());
+    out
+}
+
+/// Print [`slow_build_warning`] to stderr, at most once per process (and not after
+/// [`take_slow_build_warning`] took it). The command line calls it at start-up and
+/// [`World::new`](crate::world::World::new) before building a BVH.
+pub fn warn_if_slow_build() {
+    if let Some(w) = take_slow_build_warning() {
+        eprintln!("warning: {w}");
+    }
 }
 
 #[cfg(test)]
@@ -108,6 +117,8 @@ mod tests {
             slow_build_warning().is_some(),
             cpu.contains(&"avx2") && !compiled_features().contains(&"avx2")
         );
+        take_slow_build_warning();
+        assert_eq!(take_slow_build_warning(), None);
         warn_if_slow_build();
     }
 }

@@ -108,10 +108,12 @@ fn engine_named(name: &str) -> PyResult<Engine> {
     })
 }
 
+/// Rays per parallel work item of the ray queries (a multiple of 16, as the engines' own).
+const CHUNK: usize = 4096;
+
 /// Rays from `[ox, oy, oz, dx, dy, dz]` rows, accepting `tnear < t < tfar`.
 fn rays_of(flat: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
-    use rayon::prelude::*;
-    flat.par_chunks_exact(6)
+    flat.chunks_exact(6)
         .map(|r| {
             Ray::new(
                 Vec3::new(r[0], r[1], r[2]),
@@ -179,7 +181,6 @@ type Arr<'py, T> = Bound<'py, PyArray1<T>>;
 impl Raycaster {
     #[new]
     fn new() -> Self {
-        whitted::cpu::warn_if_slow_build();
         Raycaster {
             tris: Vec::new(),
             normals: Vec::new(),
@@ -271,26 +272,30 @@ impl Raycaster {
         let out = py.detach(|| {
             on_pool(nthreads, || {
                 use rayon::prelude::*;
-                let rays = rays_of(flat, 0.0, f32::INFINITY);
-                let hits = trace_rays(&accel, &rays, engine, false);
-                let n = hits.len();
+                let n = flat.len() / 6;
                 let mut t = vec![f32::INFINITY; n];
                 let mut g = vec![INVALID_ID; n];
                 let mut p = vec![INVALID_ID; n];
                 let mut uv = vec![0f32; 2 * n];
                 let mut nrm = vec![0f32; 3 * n];
-                t.par_iter_mut()
-                    .zip(g.par_iter_mut())
-                    .zip(p.par_iter_mut())
-                    .zip(uv.par_chunks_mut(2))
-                    .zip(nrm.par_chunks_mut(3))
-                    .zip(hits.par_iter())
-                    .for_each(|(((((t, g), p), uv), nrm), h)| {
-                        if let Some(h) = h {
-                            *t = h.t;
-                            (*g, *p) = Raycaster::ids(start, h.tri);
-                            uv.copy_from_slice(&[h.b1, h.b2]);
-                            nrm.copy_from_slice(&normals[h.tri as usize]);
+                // chunk by chunk: the chunk's rays and hits stay in cache between the
+                // conversion, the engine and the scatter into the output columns
+                t.par_chunks_mut(CHUNK)
+                    .zip(g.par_chunks_mut(CHUNK))
+                    .zip(p.par_chunks_mut(CHUNK))
+                    .zip(uv.par_chunks_mut(2 * CHUNK))
+                    .zip(nrm.par_chunks_mut(3 * CHUNK))
+                    .zip(flat.par_chunks(6 * CHUNK))
+                    .for_each(|(((((t, g), p), uv), nrm), rays)| {
+                        let hits =
+                            trace_rays(&accel, &rays_of(rays, 0.0, f32::INFINITY), engine, false);
+                        for (i, h) in hits.iter().enumerate() {
+                            if let Some(h) = h {
+                                t[i] = h.t;
+                                (g[i], p[i]) = Raycaster::ids(start, h.tri);
+                                uv[2 * i..2 * i + 2].copy_from_slice(&[h.b1, h.b2]);
+                                nrm[3 * i..3 * i + 3].copy_from_slice(&normals[h.tri as usize]);
+                            }
                         }
                     });
                 (t, g, p, uv, nrm)
@@ -321,8 +326,15 @@ impl Raycaster {
         let accel = self.accel(py);
         let out = py.detach(|| {
             on_pool(nthreads, || {
-                let rays = rays_of(flat, tnear, tfar);
-                query::occlude_rays(&accel, &rays, engine, false)
+                use rayon::prelude::*;
+                let mut out = vec![false; flat.len() / 6];
+                out.par_chunks_mut(CHUNK)
+                    .zip(flat.par_chunks(6 * CHUNK))
+                    .for_each(|(out, rays)| {
+                        let rays = rays_of(rays, tnear, tfar);
+                        out.copy_from_slice(&query::occlude_rays(&accel, &rays, engine, false));
+                    });
+                out
             })
         })?;
         Ok(out.into_pyarray(py))
@@ -555,7 +567,6 @@ impl PyScene {
     #[new]
     #[pyo3(signature = (source, defines=Vec::new()))]
     fn new(py: Python<'_>, source: &str, defines: Vec<String>) -> PyResult<Self> {
-        whitted::cpu::warn_if_slow_build();
         use whitted::io::scene_file::{SceneFile, SearchPath, build_scene};
         let load = || -> whitted::Result<(whitted::Scene, Vec<String>)> {
             let path = Path::new(source);
@@ -719,6 +730,13 @@ fn load_mesh<'py>(
     Ok((v.into_pyarray(py), t.into_pyarray(py), warnings))
 }
 
+/// The slow-build warning (`whitted::cpu::take_slow_build_warning`) the first time, then
+/// `None`; the package turns it into a `RuntimeWarning` at import.
+#[pyfunction]
+fn take_warning() -> Option<String> {
+    whitted::cpu::take_slow_build_warning()
+}
+
 /// Names of the built-in scenes.
 #[pyfunction]
 fn builtin_scenes() -> Vec<&'static str> {
@@ -732,6 +750,7 @@ fn _whitted(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(build_info, m)?)?;
     m.add_function(wrap_pyfunction!(builtin_scenes, m)?)?;
     m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(take_warning, m)?)?;
     m.add("INVALID_ID", INVALID_ID)?;
     Ok(())
 }

@@ -9,6 +9,7 @@ whitted's Rust engines with the GIL released.
 from __future__ import annotations
 
 import os
+import warnings as _warnings
 from typing import Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -24,6 +25,11 @@ __all__ = [
     "load_mesh",
     "INVALID_ID",
 ]
+
+# Once per process: the CPU has AVX2 and this build lacks it (the kernels run ~2x slower).
+_slow = _whitted.take_warning()
+if _slow:
+    _warnings.warn(_slow, RuntimeWarning, stacklevel=2)
 
 #: Marker for "no geometry" / "no primitive" in id arrays (``2**32 - 1``), as in Open3D.
 INVALID_ID: int = _whitted.INVALID_ID
