@@ -350,3 +350,15 @@ def test_meshes_from_trimesh_and_every_format(tmp_path):
     box.export(ply)
     gid = s.add_mesh(ply)
     assert s.geometry_count == gid + 1
+
+
+def test_load_mesh(tmp_path):
+    V, T = whitted.load_mesh(KITTEN)
+    assert V.dtype == np.float32 and V.shape[1] == 3
+    assert T.dtype == np.uint32 and T.shape[1] == 3 and T.max() < len(V)
+    with pytest.raises(OSError, match="path: .*missing.obj"):
+        whitted.load_mesh(tmp_path / "missing.obj")
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nf 1 2 3\n")
+    with pytest.raises(ValueError, match="path: .*bad.obj"):
+        whitted.load_mesh(bad)
