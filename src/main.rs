@@ -347,6 +347,7 @@ fn attach_hyphen_values(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<s
 
 fn main() -> ExitCode {
     let cli = Cli::parse_from(attach_hyphen_values(std::env::args_os()));
+    whitted::cpu::warn_if_slow_build();
     let result = match cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Scene { name, define } => cmd_scene(&name, &define),

@@ -32,6 +32,7 @@ pub fn trace_rays_with(
     engine: Engine,
     cull: bool,
 ) -> (Vec<Option<Hit>>, Engine) {
+    crate::cpu::warn_if_slow_build();
     let mut out = vec![None; rays.len()];
     let engine = resolve(engine, accel, rays, |e, r| {
         intersect_run(accel, &rays[r.clone()], e, cull, &mut out[r])
@@ -55,6 +56,7 @@ pub fn occluded_rays_with(
     engine: Engine,
     cull: bool,
 ) -> (Vec<bool>, Engine) {
+    crate::cpu::warn_if_slow_build();
     let mut out = vec![false; rays.len()];
     let engine = resolve(engine, accel, rays, |e, r| {
         occluded_run(accel, &rays[r.clone()], e, cull, &mut out[r])

@@ -85,6 +85,7 @@ pub struct World {
 impl World {
     /// Flatten `scene` and build its BVH.
     pub fn new(scene: Scene) -> World {
+        crate::cpu::warn_if_slow_build();
         let geometry = scene.geometry();
         let tris: Vec<[Vec3; 3]> = (0..geometry.triangles.len() as u32)
             .map(|t| geometry.triangle(t))

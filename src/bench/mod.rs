@@ -217,6 +217,7 @@ pub fn bench_mesh(path: &Path, opts: &Options) -> crate::Result<Report> {
 
 /// `whitted bench`: every mesh, tables or one JSON object on stdout.
 pub fn run(opts: &Options) -> crate::Result<()> {
+    crate::cpu::warn_if_slow_build();
     let mut meshes = opts.meshes.clone();
     if meshes.is_empty() {
         // the kitten, found as a scene file finds it: the current folder, the WHITTED_ASSETS
