@@ -15,11 +15,11 @@
 //!
 //! Where two engines are candidates, which is faster depends on the mesh as well (how soon
 //! a packet's lanes part), so a batch of at least [`PILOT_MIN`] rays settles it by a pilot
-//! ([`pilot`]): one 128-ray block in 512 (at least 16), spread over the batch, each traced by
-//! both and timed; the batch is then traced by the one with the smaller total (the pilot's blocks again: 0.4% of
-//! a large batch's rays are traced twice more, 3.1% at [`PILOT_MIN`], 2% at the bench's
-//! 201,702 rays). Smaller batches (and the renderer's tile-sized queues) take the first
-//! candidate.
+//! ([`pilot`]): runs of 192 rays covering one ray in 512 (at least 8 runs), spread over the
+//! batch, each traced by both, the first 64 rays of a run untimed; the batch is then traced
+//! by the one with the smaller total (the pilot's rays again: 0.4% of a large batch's rays
+//! are traced twice more, 1.5% at the bench's 201,702 rays, 2.3% at [`PILOT_MIN`]). Smaller
+//! batches (and the renderer's tile-sized queues) take the first candidate.
 
 use crate::accel::Accel;
 use crate::ray::Ray;
@@ -245,63 +245,70 @@ pub fn choose_by(s: Spread, avx512: bool) -> Engine {
 }
 
 /// Rays of one pilot block.
-pub const PILOT_BLOCK: usize = 128;
-/// A pilot traces one block in this many, at least [`PILOT_BLOCKS_MIN`].
+pub const PILOT_BLOCK: usize = 64;
+/// Blocks of one pilot run: the first warms the cache for the engine, the rest are timed.
+pub const PILOT_RUN: usize = 3;
+/// A pilot's runs cover one ray in this many, and there are at least [`PILOT_RUNS_MIN`].
 pub const PILOT_SHARE: usize = 512;
-/// Blocks a pilot traces at least (in pairs).
-pub const PILOT_BLOCKS_MIN: usize = 16;
+/// Runs a pilot makes at least.
+pub const PILOT_RUNS_MIN: usize = 8;
 /// Batches of fewer rays take the rule's first candidate: their pilot would trace more than
-/// 1/64 of them twice over.
-pub const PILOT_MIN: usize = 64 * PILOT_BLOCKS_MIN * PILOT_BLOCK;
+/// 1/40 of them twice over.
+pub const PILOT_MIN: usize = 131072;
 
-/// The blocks of `n` rays a pilot traces: ray ranges of [`PILOT_BLOCK`] rays (multiples of
-/// 16 apart), evenly spaced over the batch, one in [`PILOT_SHARE`] and at least
-/// [`PILOT_BLOCKS_MIN`] (an even number); none under [`PILOT_MIN`] rays.
+/// The runs of a pilot over `n` rays: ranges of [`PILOT_RUN`] blocks of [`PILOT_BLOCK`]
+/// rays (starting at multiples of 64), evenly spaced over the batch, covering one ray in
+/// [`PILOT_SHARE`] and at least [`PILOT_RUNS_MIN`] of them; none under [`PILOT_MIN`] rays.
 pub fn pilot_blocks(n: usize) -> Vec<std::ops::Range<usize>> {
     if n < PILOT_MIN {
         return vec![];
     }
-    let blocks = n / PILOT_BLOCK;
-    let count = (blocks / PILOT_SHARE).max(PILOT_BLOCKS_MIN) & !1;
+    let len = PILOT_RUN * PILOT_BLOCK;
+    let blocks = n / PILOT_BLOCK - PILOT_RUN;
+    let count = (n / (PILOT_SHARE * len)).max(PILOT_RUNS_MIN);
     (0..count)
         .map(|k| {
-            let b = k * blocks / count;
-            b * PILOT_BLOCK..(b + 1) * PILOT_BLOCK
+            let b = k * blocks / (count - 1);
+            b * PILOT_BLOCK..b * PILOT_BLOCK + len
         })
         .collect()
 }
 
-/// Time the two candidates on the pilot blocks of a batch of `n` rays (`run(engine, rays)`
-/// traces the rays of one block with `engine`): both trace every block, `a` first on even
-/// blocks and `b` first on odd ones, so that what the first leaves in the cache favours
-/// each alike; the one with the smaller total time wins. Totals, not a median of ratios:
-/// blocks differ in cost (a block of camera rays that all miss costs a tenth of one whose
-/// rays hit the mesh, and the engines rank differently on the two), so the blocks that cost
-/// most must weigh most. Each block's time counts at most [`PILOT_CLAMP`] times the other
-/// engine's on the same block, so a block slowed by a preemption does not decide. With no
-/// pilot blocks (under [`PILOT_MIN`] rays), `a`.
+/// Time the two candidates on the pilot runs of a batch of `n` rays (`run(engine, rays)`
+/// traces those rays with `engine`): both trace every run, `a` first on even runs and `b`
+/// first on odd ones, each its first block untimed (a run's first rays fetch the nodes its
+/// later rays reuse, as in the batch itself: timed alone, 128-ray blocks picked `packet16`
+/// for the 5.2M-triangle camera rays, where `hybrid16` traces the batch 1.1x as fast) and
+/// the rest timed. The one with the smaller total time wins. Totals, not a median of
+/// ratios: runs differ in cost (camera rays that all miss cost a tenth of those that hit the
+/// mesh, and the engines rank differently on the two), so the runs that cost most must weigh
+/// most. Each run's time counts at most [`PILOT_CLAMP`] times the other engine's on the
+/// same run, so a run slowed by a preemption does not decide. With no pilot runs (under
+/// [`PILOT_MIN`] rays), `a`.
 pub fn pilot(
     [a, b]: [Engine; 2],
     n: usize,
     mut run: impl FnMut(Engine, std::ops::Range<usize>),
 ) -> Engine {
-    let blocks = pilot_blocks(n);
-    if blocks.is_empty() {
+    let runs = pilot_blocks(n);
+    if runs.is_empty() {
         return a;
     }
-    let mut time = |e: Engine, r: std::ops::Range<usize>| {
+    let mut time = |e: Engine, r: &std::ops::Range<usize>| {
+        let warm = r.start + PILOT_BLOCK;
+        run(e, r.start..warm);
         let start = std::time::Instant::now();
-        run(e, r);
+        run(e, warm..r.end);
         start.elapsed().as_secs_f64()
     };
     let (mut total_a, mut total_b) = (0.0, 0.0);
-    for (k, block) in blocks.into_iter().enumerate() {
+    for (k, r) in runs.iter().enumerate() {
         let (ta, tb) = if k % 2 == 0 {
-            let ta = time(a, block.clone());
-            (ta, time(b, block))
+            let ta = time(a, r);
+            (ta, time(b, r))
         } else {
-            let tb = time(b, block.clone());
-            (time(a, block), tb)
+            let tb = time(b, r);
+            (time(a, r), tb)
         };
         total_a += ta.min(PILOT_CLAMP * tb);
         total_b += tb.min(PILOT_CLAMP * ta);
@@ -309,5 +316,5 @@ pub fn pilot(
     if total_b < total_a { b } else { a }
 }
 
-/// A pilot block's time counts at most this many times the other candidate's on it.
+/// A pilot run's time counts at most this many times the other candidate's on it.
 pub const PILOT_CLAMP: f64 = 3.0;

@@ -185,31 +185,34 @@ fn candidates_by_kind_of_batch() {
 }
 
 #[test]
-fn pilot_blocks_spread_over_the_batch() {
+fn pilot_runs_spread_over_the_batch() {
     assert!(engine::pilot_blocks(engine::PILOT_MIN - 1).is_empty());
+    let len = engine::PILOT_RUN * engine::PILOT_BLOCK;
     for n in [engine::PILOT_MIN, 201702, 262144, 2073600, 10_000_001] {
         let b = engine::pilot_blocks(n);
+        assert!(b.len() >= engine::PILOT_RUNS_MIN, "{n}");
         assert!(
-            b.len() >= engine::PILOT_BLOCKS_MIN && b.len().is_multiple_of(2),
-            "{n}"
+            b.iter()
+                .all(|r| r.len() == len && r.start % 64 == 0 && r.end <= n)
         );
-        // at most 1/64 of the rays, and 1/512 of a large batch's
+        // at most 1/40 of the rays, and 1/400 of a large batch's
         let rays: usize = b.iter().map(|r| r.len()).sum();
-        assert!(rays * 64 <= n, "{n}: {rays}");
-        if n >= 4_000_000 {
+        assert!(rays * 40 <= n, "{n}: {rays}");
+        if n >= 2_000_000 {
             assert!(rays * 400 <= n, "{n}: {rays}");
         }
         for w in b.windows(2) {
             assert!(w[0].end <= w[1].start);
         }
-        assert!(b.iter().all(|r| r.start % 16 == 0 && r.end <= n));
-        // spread: the last block in the last tenth of the batch
-        assert!(b.last().unwrap().start > n - n / 10, "{n}");
+        // spread: the first at the start, the last at the end
+        assert_eq!(b[0].start, 0);
+        assert!(b.last().unwrap().end > n - engine::PILOT_BLOCK - len, "{n}");
     }
 }
 
-/// The pilot takes the faster candidate; one slowed block does not move it; every block is
-/// traced by both; small batches take the first without a pilot.
+/// The pilot takes the faster candidate on the timed part of each run (the first block of a
+/// run untimed, for each engine); one slowed run does not move it; small batches take the
+/// first without a pilot.
 #[test]
 fn pilot_takes_the_faster() {
     use std::time::{Duration, Instant};
@@ -218,29 +221,38 @@ fn pilot_takes_the_faster() {
         while t.elapsed() < d {}
     };
     let n = engine::PILOT_MIN;
+    let runs = engine::pilot_blocks(n);
     for (slow, fast) in [
         (Engine::Packet16, Engine::Hybrid16),
         (Engine::Hybrid16, Engine::Packet16),
     ] {
-        let mut calls = vec![];
+        let mut calls: Vec<(Engine, std::ops::Range<usize>)> = vec![];
         let got = engine::pilot([Engine::Packet16, Engine::Hybrid16], n, |e, r| {
-            // one block of the fast engine preempted for a long while
-            let hiccup = calls.len() == 3;
+            let warm = r.len() == engine::PILOT_BLOCK;
+            // the fast engine's second timed part preempted for a long while
+            let hiccup = !warm && e == fast && calls.iter().filter(|c| c.0 == e).count() == 3;
             calls.push((e, r));
-            spin(Duration::from_micros(if hiccup {
-                5000
-            } else if e == slow {
-                300
-            } else {
-                100
-            }));
+            // warm-up blocks cost nothing here, so only the timed parts can decide
+            if !warm {
+                spin(Duration::from_micros(if hiccup {
+                    5000
+                } else if e == slow {
+                    300
+                } else {
+                    100
+                }));
+            }
         });
         assert_eq!(got, fast);
-        let blocks = engine::pilot_blocks(n);
-        assert_eq!(calls.len(), 2 * blocks.len());
-        for b in &blocks {
+        assert_eq!(calls.len(), 4 * runs.len());
+        for r in &runs {
+            let warm = r.start..r.start + engine::PILOT_BLOCK;
+            let timed = warm.end..r.end;
             for e in [Engine::Packet16, Engine::Hybrid16] {
-                assert_eq!(calls.iter().filter(|c| c.0 == e && c.1 == *b).count(), 1);
+                let at =
+                    |x: &std::ops::Range<usize>| calls.iter().position(|c| c.0 == e && c.1 == *x);
+                // each engine warms up on the run, then traces the rest of it, once each
+                assert!(at(&warm).unwrap() + 1 == at(&timed).unwrap(), "{e:?} {r:?}");
             }
         }
     }
