@@ -33,7 +33,7 @@ pub fn trace_rays_with(
     cull: bool,
 ) -> (Vec<Option<Hit>>, Engine) {
     crate::cpu::warn_if_slow_build();
-    let mut out = vec![None; rays.len()];
+    let mut out = output(rays.len(), None);
     let engine = resolve(engine, accel, rays, |e, r| {
         intersect_run(accel, &rays[r.clone()], e, cull, &mut out[r])
     });
@@ -57,7 +57,7 @@ pub fn occluded_rays_with(
     cull: bool,
 ) -> (Vec<bool>, Engine) {
     crate::cpu::warn_if_slow_build();
-    let mut out = vec![false; rays.len()];
+    let mut out = output(rays.len(), false);
     let engine = resolve(engine, accel, rays, |e, r| {
         occluded_run(accel, &rays[r.clone()], e, cull, &mut out[r])
     });
@@ -65,6 +65,16 @@ pub fn occluded_rays_with(
         .zip(rays.par_chunks(CHUNK))
         .for_each(|(o, r)| occluded_run(accel, r, engine, cull, o));
     (out, engine)
+}
+
+/// An output array of `n` entries, on huge pages where the kernel has them: a batch's
+/// results are written once, so faulting in small pages (2M camera rays: 41 MB, 10,000
+/// faults) is a cost of its own.
+fn output<T: Clone>(n: usize, fill: T) -> Vec<T> {
+    let mut v = Vec::with_capacity(n);
+    crate::accel::pages::advise_huge(&v);
+    v.resize(n, fill);
+    v
 }
 
 /// `engine`, or for `auto` the engine for `rays`: the rule's one candidate, or of two the
@@ -90,6 +100,25 @@ fn packets<const N: usize>(group: &[Ray]) -> [(RayPacket8, simd::M32x8); N] {
     std::array::from_fn(|h| RayPacket8::from_fn(|i| group.get(8 * h + i).copied()))
 }
 
+/// A hit packet's lanes into `out` (up to 8 entries), each field's lanes read out once.
+#[inline(always)]
+fn unpack(h: &crate::packet::HitPacket8, out: &mut [Option<Hit>]) {
+    let (tri, t, b1, b2) = (
+        simd::u32_lanes(h.tri),
+        simd::lanes(h.t),
+        simd::lanes(h.b1),
+        simd::lanes(h.b2),
+    );
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = (tri[i] != Hit::NONE_ID).then_some(Hit {
+            tri: tri[i],
+            t: t[i],
+            b1: b1[i],
+            b2: b2[i],
+        });
+    }
+}
+
 /// Closest hits of a run of rays with a concrete engine (`auto` as `packet8`), into `out`.
 fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &mut [Option<Hit>]) {
     match engine {
@@ -108,8 +137,8 @@ fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &
             for (group, o) in rays.chunks(16).zip(out.chunks_mut(16)) {
                 let [(p0, a0), (p1, a1)] = packets::<2>(group);
                 let hits = f(accel, [&p0, &p1], [a0, a1], cull);
-                for (i, o) in o.iter_mut().enumerate() {
-                    *o = hits[i / 8].lane(i % 8);
+                for (h, o) in hits.iter().zip(o.chunks_mut(8)) {
+                    unpack(h, o);
                 }
             }
         }
@@ -121,10 +150,7 @@ fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &
             };
             for (group, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
                 let [(p, a)] = packets::<1>(group);
-                let hits = f(accel, &p, a, cull);
-                for (i, o) in o.iter_mut().enumerate() {
-                    *o = hits.lane(i);
-                }
+                unpack(&f(accel, &p, a, cull), o);
             }
         }
     }
