@@ -104,10 +104,11 @@ class RaycastingScene:
 
     ``nthreads`` is accepted for Open3D's signature (the BVH build uses every core). Every
     query takes ``nthreads`` (0: one thread per core). ``cast_rays`` and ``test_occlusions``
-    also take ``engine``, whitted's traversal: ``"auto"``, ``"packet"``, ``"wide"``,
-    ``"hybrid"``, ``"packet16"``, ``"hybrid16"`` or ``"scalar"``, all giving the same hits;
-    by default (``None``) ``"auto"`` for coherent batches (neighbouring rays nearly
-    parallel, as camera rays are) and ``"wide"`` for incoherent ones.
+    also take ``engine``, whitted's traversal: ``"auto"``, ``"packet8"``, ``"wide1"``,
+    ``"hybrid8"``, ``"packet16"``, ``"hybrid16"`` or ``"scalar"`` (``"packet"``, ``"wide"``
+    and ``"hybrid"`` name the first three too), all giving the same hits; by default
+    (``None``) ``"auto"``, which chooses from the rays (16-ray packets for camera rays, the
+    single-ray wide walk for rays from anywhere in any direction).
     """
 
     INVALID_ID: int = _whitted.INVALID_ID
