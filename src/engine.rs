@@ -286,21 +286,30 @@ pub fn pilot_blocks(n: usize) -> Vec<std::ops::Range<usize>> {
 /// same run, so a run slowed by a preemption does not decide. With no pilot runs (under
 /// [`PILOT_MIN`] rays), `a`.
 pub fn pilot(
-    [a, b]: [Engine; 2],
+    two: [Engine; 2],
     n: usize,
     mut run: impl FnMut(Engine, std::ops::Range<usize>),
 ) -> Engine {
-    let runs = pilot_blocks(n);
-    if runs.is_empty() {
-        return a;
-    }
-    let mut time = |e: Engine, r: &std::ops::Range<usize>| {
+    pilot_by(two, n, |e, r| {
         let warm = r.start + PILOT_BLOCK;
         run(e, r.start..warm);
         let start = std::time::Instant::now();
         run(e, warm..r.end);
         start.elapsed().as_secs_f64()
-    };
+    })
+}
+
+/// [`pilot`]'s decision with the timing given: `time(engine, run)` traces a pilot run with
+/// `engine` and returns the seconds its timed part took.
+pub fn pilot_by(
+    [a, b]: [Engine; 2],
+    n: usize,
+    mut time: impl FnMut(Engine, &std::ops::Range<usize>) -> f64,
+) -> Engine {
+    let runs = pilot_blocks(n);
+    if runs.is_empty() {
+        return a;
+    }
     let (mut total_a, mut total_b) = (0.0, 0.0);
     for (k, r) in runs.iter().enumerate() {
         let (ta, tb) = if k % 2 == 0 {

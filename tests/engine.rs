@@ -210,50 +210,70 @@ fn pilot_runs_spread_over_the_batch() {
     }
 }
 
-/// The pilot takes the faster candidate on the timed part of each run (the first block of a
-/// run untimed, for each engine); one slowed run does not move it; small batches take the
-/// first without a pilot.
+/// The pilot's decision (given times, no clock): the faster candidate wins; one run slowed
+/// far beyond the other engine's does not move it; the runs alternate which engine goes
+/// first; small batches take the first without a pilot. And the timed pilot warms each
+/// engine on a run's first block, then traces the rest of the run, once each.
 #[test]
 fn pilot_takes_the_faster() {
-    use std::time::{Duration, Instant};
-    let spin = |d: Duration| {
-        let t = Instant::now();
-        while t.elapsed() < d {}
-    };
     let n = engine::PILOT_MIN;
     let runs = engine::pilot_blocks(n);
     for (slow, fast) in [
         (Engine::Packet16, Engine::Hybrid16),
         (Engine::Hybrid16, Engine::Packet16),
     ] {
-        let mut calls: Vec<(Engine, std::ops::Range<usize>)> = vec![];
-        let got = engine::pilot([Engine::Packet16, Engine::Hybrid16], n, |e, r| {
-            let warm = r.len() == engine::PILOT_BLOCK;
-            // the fast engine's second timed part preempted for a long while
-            let hiccup = !warm && e == fast && calls.iter().filter(|c| c.0 == e).count() == 3;
-            calls.push((e, r));
-            // warm-up blocks cost nothing here, so only the timed parts can decide
-            if !warm {
-                spin(Duration::from_micros(if hiccup {
-                    5000
-                } else if e == slow {
-                    300
-                } else {
-                    100
-                }));
+        let mut calls = vec![];
+        let got = engine::pilot_by([Engine::Packet16, Engine::Hybrid16], n, |e, r| {
+            calls.push((e, r.clone()));
+            // the fast engine's second run preempted for a long while
+            let hiccup = e == fast && calls.iter().filter(|c| c.0 == e).count() == 2;
+            if hiccup {
+                5e-3
+            } else if e == slow {
+                3e-4
+            } else {
+                1e-4
             }
         });
         assert_eq!(got, fast);
-        assert_eq!(calls.len(), 4 * runs.len());
-        for r in &runs {
-            let warm = r.start..r.start + engine::PILOT_BLOCK;
-            let timed = warm.end..r.end;
-            for e in [Engine::Packet16, Engine::Hybrid16] {
-                let at =
-                    |x: &std::ops::Range<usize>| calls.iter().position(|c| c.0 == e && c.1 == *x);
-                // each engine warms up on the run, then traces the rest of it, once each
-                assert!(at(&warm).unwrap() + 1 == at(&timed).unwrap(), "{e:?} {r:?}");
-            }
+        assert_eq!(calls.len(), 2 * runs.len());
+        for (k, r) in runs.iter().enumerate() {
+            let first = if k % 2 == 0 {
+                Engine::Packet16
+            } else {
+                Engine::Hybrid16
+            };
+            assert_eq!(calls[2 * k], (first, r.clone()));
+            assert_eq!(calls[2 * k + 1].1, *r);
+        }
+    }
+    // costly runs weigh more than cheap ones: a wins 7 cheap runs, b the one costly run
+    let mut k = 0;
+    let got = engine::pilot_by([Engine::Packet16, Engine::Hybrid16], n, |e, _| {
+        k += 1;
+        let run = (k - 1) / 2;
+        match (run, e) {
+            (0, Engine::Packet16) => 1e-2,
+            (0, _) => 5e-3,
+            (_, Engine::Packet16) => 1e-4,
+            _ => 2e-4,
+        }
+    });
+    assert_eq!(got, Engine::Hybrid16);
+    // the timed pilot: each engine warms up on a run's first block, then the rest, once each
+    let mut calls: Vec<(Engine, std::ops::Range<usize>)> = vec![];
+    engine::pilot([Engine::Packet16, Engine::Hybrid16], n, |e, r| {
+        calls.push((e, r))
+    });
+    assert_eq!(calls.len(), 4 * runs.len());
+    for r in &runs {
+        let warm = r.start..r.start + engine::PILOT_BLOCK;
+        let timed = warm.end..r.end;
+        for e in [Engine::Packet16, Engine::Hybrid16] {
+            let at = |x: &std::ops::Range<usize>| {
+                calls.iter().position(|c| c.0 == e && c.1 == *x).unwrap()
+            };
+            assert_eq!(at(&warm) + 1, at(&timed), "{e:?} {r:?}");
         }
     }
     let mut called = false;
