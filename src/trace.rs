@@ -34,8 +34,12 @@ pub fn trace_rays_with(
 ) -> (Vec<Option<Hit>>, Engine) {
     crate::cpu::warn_if_slow_build();
     let mut out = output(rays.len(), None);
-    let engine = resolve(engine, accel, rays, |e, r| {
-        intersect_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+    // (the pilot on a thread of the pool that traces the batch, as the bench's: a calling
+    // thread outside it shares the cores with the pool's threads)
+    let engine = rayon::scope(|_| {
+        resolve(engine, accel, rays, |e, r| {
+            intersect_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+        })
     });
     out.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
@@ -58,8 +62,10 @@ pub fn occluded_rays_with(
 ) -> (Vec<bool>, Engine) {
     crate::cpu::warn_if_slow_build();
     let mut out = output(rays.len(), false);
-    let engine = resolve(engine, accel, rays, |e, r| {
-        occluded_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+    let engine = rayon::scope(|_| {
+        resolve(engine, accel, rays, |e, r| {
+            occluded_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+        })
     });
     out.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))

@@ -206,11 +206,17 @@ pub fn pass(
         fn of(outs: &mut [(Engine, Out)], e: Engine) -> &mut Out {
             &mut outs.iter_mut().find(|o| o.0 == e).expect("a candidate").1
         }
-        *chosen = match crate::engine::choices(accel, rays) {
+        let mut choose = || match crate::engine::choices(accel, rays) {
             Choice::One(e) => e,
             Choice::Try(two) => crate::engine::pilot(two, rays.len(), |e, r| {
                 pass_range(accel, rays, packets, of(outs, e), r)
             }),
+        };
+        // (with a pool, on one of its threads, as the passes run: the calling thread would
+        // share the cores with the pool's threads still spinning after the last pass)
+        *chosen = match pool {
+            Some(pool) => pool.install(choose),
+            None => choose(),
         };
         return pass(accel, rays, packets, of(outs, *chosen), pool);
     }
