@@ -1,6 +1,6 @@
 //! Intersection throughput on the kitten, on the Embree peer's workloads (`whitted::bench`):
 //! primary (1920x1080 in 4x4 pixel blocks, ~90% miss), primary-hits-only, shadow (any hit)
-//! and incoherent, for every engine (`whitted::bench::Engine::ALL`: scalar, packet8, wide1,
+//! and incoherent, for every engine (`whitted::bench::ENGINES`: scalar, packet8, wide1,
 //! hybrid8, packet16), single-threaded. The hit count and a checksum of
 //! the results are asserted outside the timed loop. Needs `WHITTED_ASSETS` (or `../shared`).
 

@@ -402,28 +402,41 @@ fn peer_runs_merge_into_best_and_median() {
     assert!(bench::merge_peer(&[]).is_err());
 }
 
-/// `whitted bench` alternates with the peer: one peer run per round, each of one pass
-/// (`--reps 1`), and the report merges them. A stand-in for rt-bench logs its calls and
-/// prints the captured output.
+/// A stand-in `rt-bench` in a fresh temporary folder: a shell script that logs its arguments
+/// to `calls`, runs `guard` (shell lines that may exit first), then prints `output`. Returns
+/// the folder, the script and the log.
 #[cfg(unix)]
-#[test]
-fn bench_alternates_rounds_with_the_peer() {
+fn fake_peer(
+    name: &str,
+    output: &str,
+    guard: &str,
+) -> (std::path::PathBuf, std::path::PathBuf, std::path::PathBuf) {
     use std::os::unix::fs::PermissionsExt;
-    use whitted::bench::{Options, bench_mesh};
-    let dir = std::env::temp_dir().join(format!("whitted-fake-peer-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (peer, log, out) = (dir.join("rt-bench"), dir.join("calls"), dir.join("out.txt"));
-    std::fs::write(&out, SAMPLE).unwrap();
+    std::fs::write(&out, output).unwrap();
     std::fs::write(
         &peer,
         format!(
-            "#!/bin/sh\necho \"$*\" >> '{}'\ncat '{}'\n",
+            "#!/bin/sh\necho \"$*\" >> '{}'\n{guard}cat '{}'\n",
             log.display(),
             out.display()
         ),
     )
     .unwrap();
     std::fs::set_permissions(&peer, std::fs::Permissions::from_mode(0o755)).unwrap();
+    (dir, peer, log)
+}
+
+/// `whitted bench` alternates with the peer: one peer run per round, each of one pass
+/// (`--reps 1`), and the report merges them. A stand-in for rt-bench logs its calls and
+/// prints the captured output.
+#[cfg(unix)]
+#[test]
+fn bench_alternates_rounds_with_the_peer() {
+    use whitted::bench::{Options, bench_mesh};
+    let (dir, peer, log) = fake_peer("whitted-fake-peer", SAMPLE, "");
     let cube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
     let opts = Options {
         width: 32,
@@ -453,29 +466,20 @@ fn bench_alternates_rounds_with_the_peer() {
 
 /// An rt-bench older than `--random` refuses the flag (usage, exit 2): the bench runs it
 /// without, and reports the random workload for whitted alone.
+#[cfg(unix)]
 #[test]
 fn bench_runs_an_older_peer_without_random() {
-    use std::os::unix::fs::PermissionsExt;
     use whitted::bench::{Options, bench_mesh};
-    let dir = std::env::temp_dir().join(format!("whitted-old-peer-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let (peer, log, out) = (dir.join("rt-bench"), dir.join("calls"), dir.join("out.txt"));
     let old: String = SAMPLE
         .lines()
         .take_while(|l| !l.starts_with(" random"))
         .map(|l| format!("{l}\n"))
         .collect();
-    std::fs::write(&out, old).unwrap();
-    std::fs::write(
-        &peer,
-        format!(
-            "#!/bin/sh\necho \"$*\" >> '{}'\ncase \"$*\" in *--random*) echo usage >&2; exit 2;; esac\ncat '{}'\n",
-            log.display(),
-            out.display()
-        ),
-    )
-    .unwrap();
-    std::fs::set_permissions(&peer, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let (dir, peer, log) = fake_peer(
+        "whitted-old-peer",
+        &old,
+        "case \"$*\" in *--random*) echo usage >&2; exit 2;; esac\n",
+    );
     let cube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.obj");
     let opts = Options {
         width: 32,
