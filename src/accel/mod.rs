@@ -7,7 +7,7 @@
 //! | tree | 1 ray | 8 rays | 16 rays (AVX-512) |
 //! |---|---|---|---|
 //! | BVH2 (`Accel::nodes`) | `scalar`: `intersect1` (the reference) | `packet`: `intersect8` | `packet16`: `intersect16` |
-//! | BVH8 (`Accel::wide`, `wide`) | `wide1`: `intersect_wide1`, `intersect_wide1_many` | `wide1`: `intersect_wide8` (lane by lane) | - |
+//! | BVH8 (`Accel::wide`, `wide`) | `wide1`: `intersect_wide1`, `intersect_wide1_many` | `wide1`: `intersect_wide8` (lane by lane) | `packet16::wide16` (`hybrid16`'s any hit, and closest hit in one octant) |
 //! | BVH2, then BVH8 per lane | - | `hybrid8` (`packet`'s walk, `hand_off` the switch) | `packet16`: `intersect_hybrid16` |
 //!
 //! Each has its `occluded*` twin (any hit). Shared by all: the robustness constants and the
