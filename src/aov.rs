@@ -2,16 +2,12 @@
 //!
 //! They are captured in a pass of their own over the camera rays through pixel centres
 //! (4x2 camera packets through `intersect8`, then the scalar `surface` per hit: the same hit
-//! and shading normal the renderers compute), so neither engine's loop changes; with `--spp > 1` the beauty image is averaged
+//! and shading normal the renderers compute; `render::aov::capture_part`, over the whole image
+//! or a part of it), so neither engine's loop changes; with `--spp > 1` the beauty image is averaged
 //! but the AOVs stay one sample at the pixel centre (an averaged triangle id means nothing).
 
-use crate::accel::intersect8;
-use crate::packet::{PacketShape, camera_packet};
-use crate::shade::surface;
-use crate::simd::{self, LANES};
 use crate::world::World;
 use glam::Vec3;
-use rayon::prelude::*;
 
 /// One kind of AOV.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,57 +68,13 @@ pub struct AovImages {
     pub id: Option<Vec<u32>>,
 }
 
-/// Capture `aovs` for every pixel of the world's camera (rows in parallel).
+/// Capture `aovs` for every pixel of the world's camera: [`crate::render::aov::capture_part`]
+/// over the whole image.
 pub fn capture(world: &World, aovs: &[Aov]) -> AovImages {
     let cam = world.scene.camera();
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let cull = world.scene.cull_backfaces;
-    #[derive(Clone, Copy)]
-    struct Px {
-        albedo: Vec3,
-        normal: Vec3,
-        depth: f32,
-        id: u32,
-    }
-    let miss = Px {
-        albedo: Vec3::ZERO,
-        normal: Vec3::ZERO,
-        depth: f32::INFINITY,
-        id: u32::MAX,
-    };
-    let mut pixels = vec![miss; w * h];
-    // Pairs of rows in parallel, 4x2 camera packets through `intersect8` (each lane the
-    // scalar camera ray bit for bit), then the scalar `surface` per hit lane.
-    pixels
-        .par_chunks_mut(2 * w.max(1))
-        .enumerate()
-        .for_each(|(pair, rows)| {
-            let y0 = 2 * pair as u32;
-            for x0 in (0..w as u32).step_by(4) {
-                let (packet, active) = camera_packet(&cam, PacketShape::Block4x2, x0, y0, 0.5, 0.5);
-                let hits = intersect8(&world.accel, &packet, active, cull);
-                for i in (0..LANES).filter(|&i| simd::lane_set(active, i)) {
-                    let Some(hit) = hits.lane(i) else { continue };
-                    let (dx, dy) = PacketShape::Block4x2.offset(i);
-                    let ray = packet.lane(i);
-                    let s = surface(world, &ray, &hit);
-                    let m = &world.scene.materials[s.material as usize];
-                    rows[dy as usize * w + (x0 + dx) as usize] = Px {
-                        albedo: s.od * m.kd,
-                        normal: s.n,
-                        depth: hit.t * ray.dir.length(),
-                        id: hit.tri,
-                    };
-                }
-            }
-        });
-    let want = |a: Aov| aovs.contains(&a);
-    AovImages {
-        width: w,
-        height: h,
-        albedo: want(Aov::Albedo).then(|| pixels.iter().map(|p| p.albedo).collect()),
-        normal: want(Aov::Normal).then(|| pixels.iter().map(|p| p.normal).collect()),
-        depth: want(Aov::Depth).then(|| pixels.iter().map(|p| p.depth).collect()),
-        id: want(Aov::Id).then(|| pixels.iter().map(|p| p.id).collect()),
-    }
+    crate::render::aov::capture_part(
+        world,
+        aovs,
+        crate::image::PixelBounds::full(cam.width, cam.height),
+    )
 }

@@ -1,7 +1,7 @@
-//! AOV layers over a rectangle of the image, for the streamed writer: the same camera
-//! packets as [`crate::aov::capture`] (4x2 blocks on the image's grid, through `intersect8`,
-//! then the scalar `surface` per hit lane), so every pixel is the whole-image capture's, bit
-//! for bit, whatever rectangle it is captured in.
+//! AOV layers over a rectangle of the image (the streamed writer's bands, and the whole image
+//! for [`crate::aov::capture`]): 4x2 camera packets on the image's grid through `intersect8`,
+//! then the scalar `surface` per hit lane, so every pixel is the same, bit for bit, whatever
+//! rectangle it is captured in.
 
 use crate::accel::intersect8;
 use crate::aov::{Aov, AovImages};
