@@ -36,6 +36,21 @@ impl RayPacket8 {
         (packet, simd::mask_from_bits(bits))
     }
 
+    /// The lanes whose ray can hit anything ([`Ray::traceable`], per lane): every origin
+    /// and direction component below infinity in size (NaN fails the comparison) and bounds
+    /// that equal themselves (not NaN).
+    #[inline(always)]
+    pub fn traceable(&self) -> M32x8 {
+        let inf = simd::splat(f32::INFINITY);
+        let finite = |v: Vec3x8| {
+            simd::lt(v.x.abs(), inf) & simd::lt(v.y.abs(), inf) & simd::lt(v.z.abs(), inf)
+        };
+        finite(self.o)
+            & finite(self.d)
+            & simd::eq(self.tnear, self.tnear)
+            & simd::eq(self.tfar, self.tfar)
+    }
+
     /// Lane `i` as a ray.
     pub fn lane(&self, i: usize) -> Ray {
         Ray::new(

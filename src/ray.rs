@@ -25,6 +25,20 @@ impl Ray {
             tfar,
         }
     }
+
+    /// Whether the ray can hit anything: its origin and direction are finite and its bounds
+    /// are not NaN. Any other ray misses every triangle under the contract's test (a
+    /// non-finite origin or direction makes the plane distance or the barycentric weights
+    /// NaN or infinite, which fail the depth and inside tests), but it can meet every box
+    /// (the slab test's `min`/`max` pass the non-NaN operand), so every engine answers it
+    /// "no hit" before walking: 20,000 NaN rays on the kitten took 0.97 s with `wide1`.
+    #[inline(always)]
+    pub fn traceable(&self) -> bool {
+        self.origin.is_finite()
+            && self.dir.is_finite()
+            && !self.tnear.is_nan()
+            && !self.tfar.is_nan()
+    }
 }
 
 /// The nearest hit of a ray: the triangle's index in the scene's original triangle order, the

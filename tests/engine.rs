@@ -153,6 +153,90 @@ fn every_engine_is_intersect1_on_random_rays() {
     }
 }
 
+/// Rays with a NaN or infinite origin or direction component, or NaN bounds, hit nothing:
+/// brute force over every triangle (no boxes) says so, and every engine, closest and any
+/// hit, answers so without walking (`Ray::traceable`), lanes beside them in the same
+/// packets keeping `intersect1`'s hits bit for bit.
+#[test]
+fn rays_that_can_hit_nothing_miss_in_every_engine() {
+    let (mesh, accel) = kitten();
+    let mut rays = random_rays(&mesh, 3000);
+    let poisons: [fn(&mut Ray); 8] = [
+        |r| r.origin.x = f32::NAN,
+        |r| r.origin.z = f32::INFINITY,
+        |r| r.dir.y = f32::NAN,
+        |r| r.dir.x = f32::NEG_INFINITY,
+        |r| r.tnear = f32::NAN,
+        |r| r.tfar = f32::NAN,
+        |r| r.dir = Vec3::splat(f32::NAN),
+        |r| r.origin = Vec3::new(f32::NAN, 0.0, f32::INFINITY),
+    ];
+    let mut poisoned = vec![false; rays.len()];
+    for (i, r) in rays.iter_mut().enumerate() {
+        // (every third ray, so packets hold both kinds)
+        if i % 3 == 1 {
+            poisons[i / 3 % poisons.len()](r);
+            poisoned[i] = true;
+            assert!(!r.traceable());
+        } else {
+            assert!(r.traceable());
+        }
+    }
+    let bits = |h: Option<whitted::ray::Hit>| {
+        h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+    };
+    for (r, &p) in rays.iter().zip(&poisoned).step_by(7) {
+        if p {
+            assert_eq!(
+                whitted::accel::scalar::intersect_brute1(&accel, r, false),
+                None
+            );
+        }
+    }
+    for cull in [false, true] {
+        let want: Vec<_> = rays
+            .iter()
+            .map(|r| bits(intersect1(&accel, r, cull)))
+            .collect();
+        assert!(want.iter().zip(&poisoned).all(|(w, &p)| !p || w.is_none()));
+        assert!(want.iter().flatten().count() > rays.len() / 10);
+        let occluded: Vec<bool> = want.iter().map(Option::is_some).collect();
+        for e in Engine::ALL {
+            let got: Vec<_> = whitted::trace::trace_rays(&accel, &rays, e, cull)
+                .into_iter()
+                .map(bits)
+                .collect();
+            assert!(got == want, "{} cull {cull}", e.name());
+            let got = whitted::trace::occluded_rays(&accel, &rays, e, cull);
+            assert!(got == occluded, "{} occluded, cull {cull}", e.name());
+        }
+    }
+}
+
+#[test]
+fn packet_lanes_that_can_hit_nothing() {
+    let ok = Ray::new(Vec3::ZERO, Vec3::Z, 0.0, f32::INFINITY);
+    let mut nan = ok;
+    nan.dir.y = f32::NAN;
+    let mut inf = ok;
+    inf.origin.x = f32::INFINITY;
+    let mut far = ok;
+    far.tfar = f32::NAN;
+    let lanes = [
+        Some(ok),
+        Some(nan),
+        Some(inf),
+        Some(far),
+        None,
+        Some(ok),
+        None,
+        None,
+    ];
+    let (p, active) = whitted::packet::RayPacket8::from_fn(|i| lanes[i]);
+    assert_eq!(whitted::simd::bitmask(active), 0b0010_1111);
+    assert_eq!(whitted::simd::bitmask(active & p.traceable()), 0b0010_0001);
+}
+
 #[test]
 fn candidates_by_kind_of_batch() {
     let s = |direction, origin| Spread {

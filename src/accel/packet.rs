@@ -213,6 +213,8 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
 ) -> (HitPacket8, M32x8) {
     let mut hits = HitPacket8::none();
     let mut occluded = simd::splat(0.0);
+    // (lanes that can hit nothing leave before the walk: see `RayPacket8::traceable`)
+    active &= rays.traceable();
     if accel.nodes.is_empty() || simd::none(active) {
         return (hits, occluded);
     }

@@ -59,6 +59,7 @@ pub fn intersect16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [HitPacket8; 2] {
+    let active = traceable(rays, active);
     run16::<false, 0>(accel, rays, active, cull).map_or_else(
         || [0, 1].map(|h| intersect8(accel, rays[h], active[h], cull)),
         |(hits, _)| hits,
@@ -72,6 +73,7 @@ pub fn occluded16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [M32x8; 2] {
+    let active = traceable(rays, active);
     run16::<true, 0>(accel, rays, active, cull).map_or_else(
         || [0, 1].map(|h| occluded8(accel, rays[h], active[h], cull)),
         |(_, occ)| halves(occ),
@@ -113,6 +115,7 @@ pub fn intersect_hybrid16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [HitPacket8; 2] {
+    let active = traceable(rays, active);
     if available() && one_octant(rays, active) {
         // SAFETY: `available()` checked that the CPU has AVX-512 F and DQ, the only
         // features the kernel is compiled for beyond the crate's baseline.
@@ -123,6 +126,16 @@ pub fn intersect_hybrid16(
         || [0, 1].map(|h| intersect_hybrid8(accel, rays[h], active[h], cull)),
         |(hits, _)| hits,
     )
+}
+
+/// `active` less the lanes that can hit nothing ([`RayPacket8::traceable`]), which leave
+/// before the walk.
+#[inline(always)]
+fn traceable(rays: [&RayPacket8; 2], active: [M32x8; 2]) -> [M32x8; 2] {
+    [
+        active[0] & rays[0].traceable(),
+        active[1] & rays[1].traceable(),
+    ]
 }
 
 /// Whether the active lanes of both packets point into one octant (each direction
@@ -147,6 +160,7 @@ pub fn occluded_hybrid16(
     active: [M32x8; 2],
     cull: bool,
 ) -> [M32x8; 2] {
+    let active = traceable(rays, active);
     if !available() {
         return [0, 1].map(|h| occluded_hybrid8(accel, rays[h], active[h], cull));
     }

@@ -191,7 +191,8 @@ impl<T: Copy + Default, const N: usize> Stack<T, N> {
 /// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
 #[inline(always)]
 fn traverse1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
-    if accel.nodes.is_empty() {
+    // (a ray that can hit nothing is answered before the walk: see `Ray::traceable`)
+    if accel.nodes.is_empty() || !ray.traceable() {
         return None;
     }
     let r1 = Ray1::new(ray);

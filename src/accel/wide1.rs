@@ -221,6 +221,9 @@ thread_local! {
 /// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
 #[inline(always)]
 fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
+    if !ray.traceable() {
+        return None;
+    }
     with_stack(&accel.wide, |bvh, stack| {
         walk::<ANY_HIT>(accel, bvh, 0, &RayWide::new(ray), ray.tfar, cull, stack)
     })
@@ -492,7 +495,7 @@ fn walk_each<const ANY_HIT: bool>(
     mut hit: impl FnMut(usize, Hit),
 ) {
     with_stack(&accel.wide, |bvh, stack| {
-        for (i, ray) in rays {
+        for (i, ray) in rays.filter(|(_, ray)| ray.traceable()) {
             let r = RayWide::new(&ray);
             if let Some(h) = walk::<ANY_HIT>(accel, bvh, 0, &r, ray.tfar, cull, stack) {
                 hit(i, h);
