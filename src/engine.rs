@@ -134,7 +134,14 @@ pub const TOGETHER: f32 = 0.2;
 
 /// [`Spread`] of `rays` in a scene of box diagonal `diagonal`.
 pub fn spread(rays: &[Ray], diagonal: f32) -> Spread {
-    let groups = rays.len().div_ceil(16);
+    spread_by(rays.len(), |i| rays[i], diagonal)
+}
+
+/// [`Spread`] of a batch of `n` rays given by index (`ray_at(i)` for `i < n`; only the
+/// sampled groups' rays are asked for): what a caller whose rays are in another layout
+/// (a numpy array of rows) passes without making `Ray`s of the whole batch.
+pub fn spread_by(count: usize, ray_at: impl Fn(usize) -> Ray, diagonal: f32) -> Spread {
+    let groups = count.div_ceil(16);
     let n = groups.min(SAMPLE_GROUPS);
     if n == 0 {
         return Spread::default();
@@ -147,7 +154,13 @@ pub fn spread(rays: &[Ray], diagonal: f32) -> Spread {
     };
     for k in 0..n {
         let g = k * groups / n;
-        let group = &rays[g * 16..(g * 16 + 16).min(rays.len())];
+        let rays = g * 16..(g * 16 + 16).min(count);
+        let len = rays.len();
+        let mut group = [Ray::new(glam::Vec3::ZERO, glam::Vec3::ZERO, 0.0, 0.0); 16];
+        for (slot, i) in group.iter_mut().zip(rays) {
+            *slot = ray_at(i);
+        }
+        let group = &group[..len];
         let first = group[0];
         let octant = |r: &Ray| r.dir.cmplt(glam::Vec3::ZERO).bitmask();
         let d0 = first.dir.normalize_or_zero();
@@ -229,10 +242,18 @@ pub fn candidates(s: Spread, avx512: bool) -> Choice {
 /// The candidates for `rays` in `accel` ([`spread`] over the scene's box, then
 /// [`candidates`] with the AVX-512 kernels if the CPU runs them).
 pub fn choices(accel: &Accel, rays: &[Ray]) -> Choice {
+    choices_by(accel, rays.len(), |i| rays[i])
+}
+
+/// [`choices`] for a batch of `n` rays given by index ([`spread_by`]).
+pub fn choices_by(accel: &Accel, n: usize, ray_at: impl Fn(usize) -> Ray) -> Choice {
     let diagonal = accel.nodes.first().map_or(0.0, |n| {
         (glam::Vec3::from(n.max) - glam::Vec3::from(n.min)).length()
     });
-    candidates(spread(rays, diagonal), crate::accel::packet16::available())
+    candidates(
+        spread_by(n, ray_at, diagonal),
+        crate::accel::packet16::available(),
+    )
 }
 
 /// The engine for `rays` by the rule alone, without a pilot ([`Choice::first`] of

@@ -38,12 +38,12 @@ pub fn trace_rays_with(
     // thread outside it shares the cores with the pool's threads)
     let engine = rayon::scope(|_| {
         resolve(engine, accel, rays, |e, r| {
-            intersect_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+            intersect_into(accel, &rays[r.clone()], e, cull, &mut out[r])
         })
     });
     out.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
-        .for_each(|(o, r)| intersect_run(accel, r, engine, cull, o));
+        .for_each(|(o, r)| intersect_into(accel, r, engine, cull, o));
     (out, engine)
 }
 
@@ -64,12 +64,12 @@ pub fn occluded_rays_with(
     let mut out = output(rays.len(), false);
     let engine = rayon::scope(|_| {
         resolve(engine, accel, rays, |e, r| {
-            occluded_run(accel, &rays[r.clone()], e, cull, &mut out[r])
+            occluded_into(accel, &rays[r.clone()], e, cull, &mut out[r])
         })
     });
     out.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
-        .for_each(|(o, r)| occluded_run(accel, r, engine, cull, o));
+        .for_each(|(o, r)| occluded_into(accel, r, engine, cull, o));
     (out, engine)
 }
 
@@ -101,6 +101,54 @@ pub fn resolve(
     }
 }
 
+/// `engine`, or for `auto` the rule's first candidate for `rays` (no pilot).
+fn concrete(engine: Engine, accel: &Accel, rays: &[Ray]) -> Engine {
+    if engine == Engine::Auto {
+        crate::engine::choose(accel, rays)
+    } else {
+        engine
+    }
+}
+
+/// `engine`, or for `auto` the engine for a batch of `n` rays given by index (`ray_at(i)`,
+/// `i < n`): the rule's one candidate, or of two the faster on a pilot over the batch
+/// ([`crate::engine::pilot`]), closest hits or with `any_hit` occlusion, with `cull`. For
+/// callers that keep their rays in a layout of their own (a numpy array of rows) and trace
+/// it chunk by chunk with [`intersect_into`] / [`occluded_into`]: the choice is made once
+/// for the batch, as [`trace_rays`] makes it, and only the sampled and piloted rays are
+/// made into `Ray`s here. Run it on a thread of the pool that traces the batch (inside
+/// `rayon::scope` or the pool's `install`): a pilot timed beside the pool's busy threads
+/// measures the wrong thing.
+pub fn resolve_by(
+    engine: Engine,
+    accel: &Accel,
+    n: usize,
+    ray_at: impl Fn(usize) -> Ray,
+    any_hit: bool,
+    cull: bool,
+) -> Engine {
+    if engine != Engine::Auto {
+        return engine;
+    }
+    match crate::engine::choices_by(accel, n, &ray_at) {
+        Choice::One(e) => e,
+        Choice::Try(two) => {
+            let (mut rays, mut hits, mut blocked) = (Vec::new(), Vec::new(), Vec::new());
+            crate::engine::pilot(two, n, |e, range| {
+                rays.clear();
+                rays.extend(range.map(&ray_at));
+                if any_hit {
+                    blocked.resize(rays.len(), false);
+                    occluded_into(accel, &rays, e, cull, &mut blocked);
+                } else {
+                    hits.resize(rays.len(), None);
+                    intersect_into(accel, &rays, e, cull, &mut hits);
+                }
+            })
+        }
+    }
+}
+
 /// 8 or 16 consecutive rays as packets of 8 (padding lanes inactive).
 fn packets<const N: usize>(group: &[Ray]) -> [(RayPacket8, simd::M32x8); N] {
     std::array::from_fn(|h| RayPacket8::from_fn(|i| group.get(8 * h + i).copied()))
@@ -125,8 +173,22 @@ fn unpack(h: &crate::packet::HitPacket8, out: &mut [Option<Hit>]) {
     }
 }
 
-/// Closest hits of a run of rays with a concrete engine (`auto` as `packet8`), into `out`.
-fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &mut [Option<Hit>]) {
+/// Closest hits of `rays` with `engine` on the calling thread, into `out` (the same length):
+/// the piece of a batch that a caller with its own parallel loop and ray layout traces per
+/// chunk, with the engine chosen once for the batch ([`resolve_by`]). `auto` here takes the
+/// rule's first candidate for these rays ([`crate::engine::choose`]).
+///
+/// # Panics
+/// If `out` is shorter than `rays`.
+pub fn intersect_into(
+    accel: &Accel,
+    rays: &[Ray],
+    engine: Engine,
+    cull: bool,
+    out: &mut [Option<Hit>],
+) {
+    let engine = concrete(engine, accel, rays);
+    let out = &mut out[..rays.len()];
     match engine {
         Engine::Scalar => {
             for (o, r) in out.iter_mut().zip(rays) {
@@ -148,6 +210,7 @@ fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &
                 }
             }
         }
+        // (`concrete` resolved `auto`)
         Engine::Auto | Engine::Packet | Engine::Hybrid => {
             let f = if engine == Engine::Hybrid {
                 intersect_hybrid8
@@ -162,8 +225,14 @@ fn intersect_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &
     }
 }
 
-/// Occlusion of a run of rays with a concrete engine (`auto` as `packet8`), into `out`.
-fn occluded_run(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &mut [bool]) {
+/// Whether each of `rays` is blocked (any hit), with `engine` on the calling thread, into
+/// `out` (the same length): [`intersect_into`]'s twin.
+///
+/// # Panics
+/// If `out` is shorter than `rays`.
+pub fn occluded_into(accel: &Accel, rays: &[Ray], engine: Engine, cull: bool, out: &mut [bool]) {
+    let engine = concrete(engine, accel, rays);
+    let out = &mut out[..rays.len()];
     match engine {
         Engine::Scalar => {
             for (o, r) in out.iter_mut().zip(rays) {

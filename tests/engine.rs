@@ -213,6 +213,53 @@ fn rays_that_can_hit_nothing_miss_in_every_engine() {
     }
 }
 
+/// The pieces a caller with its own ray layout uses (the Python package): the spread and
+/// the choice from rays given by index equal those from the slice, `resolve_by` keeps a
+/// named engine and takes the rule's one candidate for random rays, and `intersect_into` /
+/// `occluded_into` on chunks return `intersect1`'s bytes with every engine.
+#[test]
+fn batches_given_by_index() {
+    let (mesh, accel) = kitten();
+    let rays = random_rays(&mesh, 5000);
+    let at = |i: usize| rays[i];
+    assert_eq!(engine::spread_by(rays.len(), at, 2.5), spread(&rays, 2.5));
+    assert_eq!(
+        engine::choices_by(&accel, rays.len(), at),
+        engine::choices(&accel, &rays)
+    );
+    assert_eq!(engine::choices(&accel, &rays), Choice::One(Engine::Wide));
+    for any_hit in [false, true] {
+        let n = rays.len();
+        let auto = whitted::trace::resolve_by(Engine::Auto, &accel, n, at, any_hit, false);
+        assert_eq!(auto, Engine::Wide);
+        let named = whitted::trace::resolve_by(Engine::Hybrid, &accel, n, at, any_hit, false);
+        assert_eq!(named, Engine::Hybrid);
+    }
+    let want: Vec<_> = rays.iter().map(|r| intersect1(&accel, r, false)).collect();
+    for e in Engine::ALL {
+        let mut hits = vec![None; rays.len()];
+        let mut blocked = vec![false; rays.len()];
+        // (chunks of odd sizes, so packets are cut short)
+        for (k, r) in rays.chunks(1000 - 3).enumerate() {
+            let at = k * (1000 - 3);
+            whitted::trace::intersect_into(&accel, r, e, false, &mut hits[at..]);
+            whitted::trace::occluded_into(&accel, r, e, false, &mut blocked[at..]);
+        }
+        let bits =
+            |h: &Option<whitted::ray::Hit>| h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits()));
+        assert!(
+            hits.iter().map(bits).eq(want.iter().map(bits)),
+            "{}",
+            e.name()
+        );
+        assert!(
+            blocked.iter().copied().eq(want.iter().map(Option::is_some)),
+            "{}",
+            e.name()
+        );
+    }
+}
+
 #[test]
 fn packet_lanes_that_can_hit_nothing() {
     let ok = Ray::new(Vec3::ZERO, Vec3::Z, 0.0, f32::INFINITY);

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 use whitted::accel::{Accel, BuildQuality};
 use whitted::ray::Ray;
-use whitted::trace::{Engine, trace_rays};
+use whitted::trace::{self, Engine, trace_rays};
 use whitted::{Error, query};
 
 /// Open3D's marker for "no geometry / no primitive".
@@ -61,10 +61,10 @@ fn on_pool<T: Send>(nthreads: usize, f: impl FnOnce() -> T + Send) -> PyResult<T
     Ok(pool.install(f))
 }
 
-/// The engine for a batch: the one named, or with `""` whitted's `Auto`, which chooses from
-/// the rays of each parallel chunk (`whitted::engine`: 16-ray packets for beams such as
-/// camera rays, the hybrid for rays scattered from nearby origins, one ray at a time down
-/// the 8-wide tree for rays from anywhere in any direction).
+/// The engine for a batch: the one named, or with `""` whitted's `Auto`, which chooses once
+/// per batch from the rays ([`batch_engine`]; `whitted::engine`: 16-ray packets for beams
+/// such as camera rays, the hybrid for rays scattered from nearby origins, one ray at a
+/// time down the 8-wide tree for rays from anywhere in any direction).
 fn pick_engine(name: &str) -> PyResult<Engine> {
     if name.is_empty() {
         Ok(Engine::Auto)
@@ -85,18 +85,43 @@ fn engine_named(name: &str) -> PyResult<Engine> {
 /// Rays per parallel work item of the ray queries (a multiple of 16, as the engines' own).
 const CHUNK: usize = 4096;
 
+/// The ray of one `[ox, oy, oz, dx, dy, dz]` row, accepting `tnear < t < tfar`.
+#[inline(always)]
+fn row_ray(r: &[f32], tnear: f32, tfar: f32) -> Ray {
+    Ray::new(
+        Vec3::new(r[0], r[1], r[2]),
+        Vec3::new(r[3], r[4], r[5]),
+        tnear,
+        tfar,
+    )
+}
+
 /// Rays from `[ox, oy, oz, dx, dy, dz]` rows, accepting `tnear < t < tfar`.
 fn rays_of(flat: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
     flat.chunks_exact(6)
-        .map(|r| {
-            Ray::new(
-                Vec3::new(r[0], r[1], r[2]),
-                Vec3::new(r[3], r[4], r[5]),
-                tnear,
-                tfar,
-            )
-        })
+        .map(|r| row_ray(r, tnear, tfar))
         .collect()
+}
+
+/// The rows of `flat` as rays into `buf` (cleared first): a chunk's rays, made in a buffer
+/// the worker thread reuses from chunk to chunk.
+fn fill_rays(buf: &mut Vec<Ray>, flat: &[f32], tnear: f32, tfar: f32) {
+    buf.clear();
+    buf.extend(flat.chunks_exact(6).map(|r| row_ray(r, tnear, tfar)));
+}
+
+/// The engine for a whole batch of rows (`auto`'s choice made once, with its pilot on a
+/// large batch, on a thread of the current pool), which every chunk then traces with.
+fn batch_engine(
+    engine: Engine,
+    accel: &Accel,
+    flat: &[f32],
+    tnear: f32,
+    tfar: f32,
+    any_hit: bool,
+) -> Engine {
+    let ray_at = |i: usize| row_ray(&flat[6 * i..6 * i + 6], tnear, tfar);
+    rayon::scope(|_| trace::resolve_by(engine, accel, flat.len() / 6, ray_at, any_hit, false))
 }
 
 fn points_of(flat: &[f32]) -> Vec<Vec3> {
@@ -247,6 +272,7 @@ impl Raycaster {
             on_pool(nthreads, || {
                 use rayon::prelude::*;
                 let n = flat.len() / 6;
+                let engine = batch_engine(engine, &accel, flat, 0.0, f32::INFINITY, false);
                 let mut t = vec![f32::INFINITY; n];
                 let mut g = vec![INVALID_ID; n];
                 let mut p = vec![INVALID_ID; n];
@@ -260,18 +286,22 @@ impl Raycaster {
                     .zip(uv.par_chunks_mut(2 * CHUNK))
                     .zip(nrm.par_chunks_mut(3 * CHUNK))
                     .zip(flat.par_chunks(6 * CHUNK))
-                    .for_each(|(((((t, g), p), uv), nrm), rays)| {
-                        let hits =
-                            trace_rays(&accel, &rays_of(rays, 0.0, f32::INFINITY), engine, false);
-                        for (i, h) in hits.iter().enumerate() {
-                            if let Some(h) = h {
-                                t[i] = h.t;
-                                (g[i], p[i]) = Raycaster::ids(start, h.tri);
-                                uv[2 * i..2 * i + 2].copy_from_slice(&[h.b1, h.b2]);
-                                nrm[3 * i..3 * i + 3].copy_from_slice(&normals[h.tri as usize]);
+                    .for_each_init(
+                        || (Vec::with_capacity(CHUNK), Vec::with_capacity(CHUNK)),
+                        |(rays, hits), (((((t, g), p), uv), nrm), rows)| {
+                            fill_rays(rays, rows, 0.0, f32::INFINITY);
+                            hits.resize(rays.len(), None);
+                            trace::intersect_into(&accel, rays, engine, false, hits);
+                            for (i, h) in hits.iter().enumerate() {
+                                if let Some(h) = h {
+                                    t[i] = h.t;
+                                    (g[i], p[i]) = Raycaster::ids(start, h.tri);
+                                    uv[2 * i..2 * i + 2].copy_from_slice(&[h.b1, h.b2]);
+                                    nrm[3 * i..3 * i + 3].copy_from_slice(&normals[h.tri as usize]);
+                                }
                             }
-                        }
-                    });
+                        },
+                    );
                 (t, g, p, uv, nrm)
             })
         })?;
@@ -301,12 +331,13 @@ impl Raycaster {
         let out = py.detach(|| {
             on_pool(nthreads, || {
                 use rayon::prelude::*;
+                let engine = batch_engine(engine, &accel, flat, tnear, tfar, true);
                 let mut out = vec![false; flat.len() / 6];
                 out.par_chunks_mut(CHUNK)
                     .zip(flat.par_chunks(6 * CHUNK))
-                    .for_each(|(out, rays)| {
-                        let rays = rays_of(rays, tnear, tfar);
-                        out.copy_from_slice(&query::occlude_rays(&accel, &rays, engine, false));
+                    .for_each_init(Vec::new, |rays, (out, rows)| {
+                        fill_rays(rays, rows, tnear, tfar);
+                        trace::occluded_into(&accel, rays, engine, false, out);
                     });
                 out
             })
