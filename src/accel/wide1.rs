@@ -5,14 +5,24 @@
 //! `intersect_wide1` / `occluded_wide1` return exactly what `intersect1` / `occluded1`
 //! return: the per-triangle arithmetic is the same, the boxes are the same padded boxes, and
 //! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
+//!
+//! The walks themselves are in `walk` (closest and any hit, as steps over a walk's state);
+//! the batch calls (`intersect_wide1_many`, `occluded_wide1_many`) take eight walks at a
+//! time in turn, with prefetches (`interleave`).
+
+mod interleave;
+mod walk;
 
 use super::robust::{BARY_SAFE, nearer};
 use super::scalar::inside_f64;
-use super::wide::{Bvh8, LEAF_BIT, TriBlock8, leaf_blocks};
-use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE, safe_inv};
+use super::wide::{Bvh8, Node8, TriBlock8};
+use super::{Accel, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::{Hit, Ray};
 use crate::simd::{self, F32x8, M32x8, Vec3x8};
+use interleave::interleaved_batch;
+use walk::{Any, Closest};
+pub(super) use walk::{STACK, grow_stack, walk};
 
 /// A ray splatted across lanes for the wide kernels, with what the slab test needs.
 #[derive(Clone, Copy, Debug)]
@@ -160,7 +170,7 @@ pub fn hit_block1<const ANY_HIT: bool>(
 /// Near and far planes are picked per axis by the direction's sign, which gives exactly
 /// `min` / `max` of the two plane distances of `hit_box1`.
 #[inline(always)]
-pub fn hit_node1(node: &super::wide::Node8, r: &RayWide, tfar: f32) -> NodeHits {
+pub fn hit_node1(node: &Node8, r: &RayWide, tfar: f32) -> NodeHits {
     let axis = |k: usize, o: F32x8, inv: F32x8, inv_far: F32x8| {
         // (`& 1`: the index is 0 or 1, which the compiler then knows.)
         let near = node.bounds[r.near[k] & 1][k];
@@ -195,29 +205,6 @@ pub struct NodeHits {
     pub inside: u32,
 }
 
-/// Traversal stack entries a walk of `bvh` needs: each node level leaves at most 7 entries
-/// behind, and a node writes at most 8 slots at once (the closest-hit walk's octant pass
-/// writes all of them).
-fn stack_need(bvh: &Bvh8) -> usize {
-    bvh.depth * 7 + 8
-}
-
-/// Grow the thread's traversal `stack` to what a walk of `bvh` needs ([`stack_need`]), for
-/// every user of [`STACK`].
-#[inline(always)]
-pub(super) fn grow_stack(stack: &mut Vec<(u32, f32)>, bvh: &Bvh8) {
-    let need = stack_need(bvh);
-    if stack.len() < need {
-        stack.resize(need, (0, 0.0));
-    }
-}
-
-thread_local! {
-    /// Traversal stack of this thread, grown to the deepest tree seen (so a ray allocates
-    /// nothing and clears nothing).
-    pub(super) static STACK: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
 /// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).
 #[inline(always)]
 fn traverse_wide1<const ANY_HIT: bool>(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
@@ -244,208 +231,6 @@ fn with_stack<R>(bvh: &Bvh8, f: impl FnOnce(&Bvh8, &mut [(u32, f32)]) -> R) -> O
     }))
 }
 
-/// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
-/// nearest hit with `tnear < t < tfar` ([`walk_closest`]), or with `ANY_HIT` the first
-/// ([`walk_any`]). `stack` holds at least [`stack_need`] entries.
-#[inline(always)]
-pub(super) fn walk<const ANY_HIT: bool>(
-    accel: &Accel,
-    bvh: &Bvh8,
-    start: u32,
-    r: &RayWide,
-    tfar: f32,
-    cull: bool,
-    stack: &mut [(u32, f32)],
-) -> Option<Hit> {
-    if ANY_HIT {
-        walk_any(accel, bvh, start, r, tfar, cull, stack)
-    } else {
-        walk_closest(accel, bvh, start, r, tfar, cull, stack)
-    }
-}
-
-/// The closest-hit walk. Hit children are visited nearest first by entry distance (two
-/// children compared, more pushed in the octant's precomputed order), and a popped entry
-/// farther than the closest hit so far is dropped.
-///
-/// A node's hit leaf children are tested at the node, before its inner children are
-/// descended into or pushed: the walk then only ever steps to nodes (no leaf-or-node branch
-/// after each step, which went either way on 2.5 steps of an incoherent ray, and no stack
-/// entries for leaves). A leaf is skipped when a hit found at the same node already lies
-/// before its box.
-#[inline(always)]
-fn walk_closest(
-    accel: &Accel,
-    bvh: &Bvh8,
-    start: u32,
-    r: &RayWide,
-    mut tfar: f32,
-    cull: bool,
-    stack: &mut [(u32, f32)],
-) -> Option<Hit> {
-    let mut best: Option<Hit> = None;
-    // the blocks of leaf `leaf` against the ray: the best hit so far and the limit updated.
-    macro_rules! test_leaf {
-        ($leaf:expr) => {
-            let (first, count) = leaf_blocks($leaf);
-            for block in first..first + count {
-                if let Some(h) = hit_block1::<false>(accel, block, r, tfar, cull) {
-                    // record hit: as in intersect1, the new limit is the next float above
-                    // t and an exact tie keeps the lower original triangle index.
-                    if best.is_none_or(|b| nearer(h.t, h.tri, b.t, b.tri)) {
-                        best = Some(h);
-                        tfar = h.t.next_up();
-                    }
-                }
-            }
-        };
-    }
-    if start & LEAF_BIT != 0 {
-        test_leaf!(start);
-        return best;
-    }
-    let mut sp = 0usize;
-    let mut cur = start;
-    loop {
-        let node = &bvh.nodes[cur as usize];
-        let NodeHits { bits, lo, .. } = hit_node1(node, r, tfar);
-        let leaves = bits & node.leaves();
-        let mut m = leaves;
-        while m != 0 {
-            let slot = m.trailing_zeros() as usize;
-            m &= m - 1;
-            if lo[slot] > tfar * SLAB_FAR_SCALE {
-                continue;
-            }
-            test_leaf!(node.child[slot]);
-        }
-        let inner = bits & !leaves;
-        if inner != 0 {
-            let rest = inner & (inner - 1);
-            if rest == 0 {
-                // one child: descend, unless a hit at this node lies before it.
-                let slot = inner.trailing_zeros() as usize;
-                if lo[slot] <= tfar * SLAB_FAR_SCALE {
-                    cur = node.child[slot];
-                    continue;
-                }
-            } else if rest & (rest - 1) == 0 {
-                // two children (the usual case): nearer first by entry distance, the other
-                // pushed.
-                let (a, b) = (
-                    inner.trailing_zeros() as usize,
-                    rest.trailing_zeros() as usize,
-                );
-                let (first, later) = if lo[b] < lo[a] { (b, a) } else { (a, b) };
-                stack[sp] = (node.child[later], lo[later]);
-                sp += 1;
-                if lo[first] <= tfar * SLAB_FAR_SCALE {
-                    cur = node.child[first];
-                    continue;
-                }
-            } else {
-                // several: push the hit ones farthest first in the octant's order (no
-                // branches: every slot is written, the pointer moves only for hit ones),
-                // then go on with the nearest (through the pop below).
-                let order = node.order[r.octant];
-                for k in (0..8).rev() {
-                    let slot = (order >> (3 * k) & 7) as usize;
-                    stack[sp] = (node.child[slot], lo[slot]);
-                    sp += (inner >> slot & 1) as usize;
-                }
-            }
-        }
-        // pop the next node still in front of the closest hit.
-        loop {
-            if sp == 0 {
-                return best;
-            }
-            sp -= 1;
-            let (next, tentry) = stack[sp];
-            if tentry <= tfar * SLAB_FAR_SCALE {
-                cur = next;
-                break;
-            }
-        }
-    }
-}
-
-/// The any-hit walk (shadow rays), which stops at the first hit. It keeps no entry distances
-/// and sorts nothing, as Embree's any-hit traversal: `tfar` never moves, so no pushed
-/// entry is ever dropped, and an unoccluded ray (70% of the bench's shadow rays) visits
-/// every box it meets whatever the order. The one order kept is `ORIGIN_LAST`: at a node,
-/// the hit leaves the ray does not start in are tested before those it starts in, and the
-/// inner children it starts in are pushed before the others, so they are visited after
-/// them; within each group, slot order. Against the distance-ordered walk (the closest-hit
-/// walk's order with the origin-last choice on top) this traced 1.08-1.10x as fast on the
-/// kitten's shadow rays and 1.05-1.10x at 1.3M triangles (alternating runs in one
-/// process): no lane extraction of the entry distances, no branch on the number of
-/// children hit, no octant-order pass. Ordering two children by distance on top cost back
-/// half the gain; dropping the origin-last groups (plain slot order) traced 0.97-0.98x.
-#[inline(always)]
-fn walk_any(
-    accel: &Accel,
-    bvh: &Bvh8,
-    start: u32,
-    r: &RayWide,
-    tfar: f32,
-    cull: bool,
-    stack: &mut [(u32, f32)],
-) -> Option<Hit> {
-    // the first hit in the blocks of leaf `leaf`, returned from the walk.
-    macro_rules! test_leaf {
-        ($leaf:expr) => {
-            let (first, count) = leaf_blocks($leaf);
-            for block in first..first + count {
-                if let Some(h) = hit_block1::<true>(accel, block, r, tfar, cull) {
-                    return Some(h);
-                }
-            }
-        };
-    }
-    if start & LEAF_BIT != 0 {
-        test_leaf!(start);
-        return None;
-    }
-    let mut sp = 0usize;
-    let mut cur = start;
-    loop {
-        let node = &bvh.nodes[cur as usize];
-        let NodeHits { bits, inside, .. } = hit_node1(node, r, tfar);
-        let (inside, outside) = if ORIGIN_LAST {
-            (inside, !inside)
-        } else {
-            (0, u32::MAX)
-        };
-        let leaves = bits & node.leaves();
-        if leaves != 0 {
-            for mut m in [leaves & outside, leaves & inside] {
-                while m != 0 {
-                    let slot = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    test_leaf!(node.child[slot]);
-                }
-            }
-        }
-        // pushed: the boxes the ray starts in first (so visited last), then the others; the
-        // last one pushed is popped at once.
-        let inner = bits & !leaves;
-        for mut m in [inner & inside, inner & outside] {
-            while m != 0 {
-                let slot = m.trailing_zeros() as usize;
-                m &= m - 1;
-                stack[sp].0 = node.child[slot];
-                sp += 1;
-            }
-        }
-        if sp == 0 {
-            return None;
-        }
-        sp -= 1;
-        cur = stack[sp].0;
-    }
-}
-
 /// Closest hit with `tnear < t < tfar` on the wide tree; equals `intersect1` bit for bit.
 pub fn intersect_wide1(accel: &Accel, ray: &Ray, cull: bool) -> Option<Hit> {
     traverse_wide1::<false>(accel, ray, cull)
@@ -457,36 +242,32 @@ pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
 }
 
 /// `intersect_wide1` on every ray of `rays`, into `out` (the same length): the same answers,
-/// the thread's stack borrowed once for the batch instead of once per ray (1.02x at 1.3M
-/// triangles and 1.06x on the kitten on incoherent rays, as Embree's 8-ray call gains over
-/// its one-ray call).
+/// the walks interleaved eight at a time with each one's next node and leaf blocks
+/// prefetched (`interleave`; docs/engines.md has the measurements), the thread's stack
+/// borrowed once for the batch.
 ///
 /// # Panics
 /// If `out` is shorter than `rays`.
 pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
     let out = &mut out[..rays.len()];
     out.fill(None);
-    walk_each::<false>(accel, rays.iter().copied().enumerate(), cull, |i, h| {
-        out[i] = Some(h)
-    });
+    interleaved_batch(accel, rays, cull, |i, w: &Closest| out[i] = w.best);
 }
 
-/// `occluded_wide1` on every ray of `rays`, into `out` (the same length), the stack borrowed
-/// once.
+/// `occluded_wide1` on every ray of `rays`, into `out` (the same length), interleaved as
+/// [`intersect_wide1_many`].
 ///
 /// # Panics
 /// If `out` is shorter than `rays`.
 pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [bool]) {
     let out = &mut out[..rays.len()];
     out.fill(false);
-    walk_each::<true>(accel, rays.iter().copied().enumerate(), cull, |i, _| {
-        out[i] = true
-    });
+    interleaved_batch(accel, rays, cull, |i, w: &Any| out[i] = w.hit.is_some());
 }
 
 /// One walk from the root per `(index, ray)`, the thread's stack borrowed once for all of
-/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree). What the batch
-/// entries and the packets' per-lane hand-offs share.
+/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree): the packets'
+/// per-lane calls (`intersect_wide8`, `occluded_wide8`).
 #[inline(always)]
 fn walk_each<const ANY_HIT: bool>(
     accel: &Accel,

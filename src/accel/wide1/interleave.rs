@@ -1,0 +1,169 @@
+//! Several single-ray walks at once ([`interleaved`]): each takes one step (a node visit)
+//! in turn, and the node and leaf blocks each will read next are prefetched, so that while
+//! one walk waits on memory the core works on the others.
+
+use super::RayWide;
+use super::walk::{Any, Closest, STACK, stack_need};
+use crate::accel::Accel;
+use crate::accel::wide::{Bvh8, Node8, TriBlock8, leaf_blocks};
+use crate::ray::Ray;
+
+/// Ask for the lines of leaf `leaf`'s blocks that a single-ray test reads (all but the ids'
+/// line).
+#[inline(always)]
+pub(super) fn prefetch_leaf(accel: &Accel, leaf: u32) {
+    let (first, count) = leaf_blocks(leaf);
+    for b in first..first + count {
+        let p = (&accel.wide.blocks[b] as *const TriBlock8).cast::<i8>();
+        for line in 0..6 {
+            prefetch(p.wrapping_add(64 * line));
+        }
+    }
+}
+
+/// Ask for node `n`'s four cache lines ahead of its visit (nothing for a reference that is
+/// not a node).
+#[inline(always)]
+pub(super) fn prefetch_node(bvh: &Bvh8, n: u32) {
+    if let Some(node) = bvh.nodes.get(n as usize) {
+        let p = (node as *const Node8).cast::<i8>();
+        for line in 0..4 {
+            prefetch(p.wrapping_add(64 * line));
+        }
+    }
+}
+
+/// Ask for the cache line at `p` into L1 (nothing elsewhere than x86-64).
+#[inline(always)]
+fn prefetch(p: *const i8) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        #[allow(unsafe_code)]
+        // SAFETY: SSE, the one feature `_mm_prefetch` needs, is part of every x86-64 CPU; a
+        // prefetch is a hint that reads nothing into the program and never faults, whatever
+        // the address (every caller passes one inside the tree's arrays anyway).
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
+/// Walks [`interleaved`] takes in turn.
+const INTERLEAVE: usize = 8;
+
+/// One walk of type `W` from the root per traceable ray of `rays`, [`INTERLEAVE`] at a
+/// time taking one step each in turn, the next node of each prefetched; `done(i, walk)`
+/// as ray `i`'s walk ends. The same walks as one after another, so the same answers; but
+/// a random ray's walk is a chain of dependent loads, each a likely cache miss on a mesh
+/// larger than the caches, and here each load is asked for a step ahead while the core
+/// works on the other walks. `stack` holds at least `INTERLEAVE` times [`stack_need`]
+/// entries.
+#[inline(always)]
+fn interleaved<W: Walk>(
+    accel: &Accel,
+    bvh: &Bvh8,
+    rays: &[Ray],
+    cull: bool,
+    stack: &mut [(u32, f32)],
+    mut done: impl FnMut(usize, &W),
+) {
+    let mut stacks = stack.chunks_mut(stack_need(bvh));
+    let mut stacks: [&mut [(u32, f32)]; INTERLEAVE] =
+        std::array::from_fn(|_| stacks.next().unwrap_or_default());
+    let mut next = 0usize;
+    // the walk of the next traceable ray
+    let mut start = || {
+        while next < rays.len() {
+            let i = next;
+            next += 1;
+            if rays[i].traceable() {
+                return Some((i, W::root(&rays[i])));
+            }
+        }
+        None
+    };
+    let mut walks: [Option<(usize, W)>; INTERLEAVE] = std::array::from_fn(|_| start());
+    loop {
+        let mut busy = false;
+        for (slot, st) in walks.iter_mut().zip(stacks.iter_mut()) {
+            if let Some((i, w)) = slot {
+                busy = true;
+                if w.step(accel, bvh, cull, st) {
+                    done(*i, w);
+                    *slot = start();
+                } else {
+                    prefetch_node(bvh, w.next());
+                }
+            }
+        }
+        if !busy {
+            return;
+        }
+    }
+}
+
+/// [`interleaved`] with the thread's stack, grown for [`INTERLEAVE`] walks (nothing on an
+/// empty tree).
+#[inline(always)]
+pub(super) fn interleaved_batch<W: Walk>(
+    accel: &Accel,
+    rays: &[Ray],
+    cull: bool,
+    done: impl FnMut(usize, &W),
+) {
+    let bvh = &accel.wide;
+    if bvh.nodes.is_empty() {
+        return;
+    }
+    STACK.with_borrow_mut(|stack| {
+        let need = INTERLEAVE * stack_need(bvh);
+        if stack.len() < need {
+            stack.resize(need, (0, 0.0));
+        }
+        interleaved(accel, bvh, rays, cull, stack, done)
+    });
+}
+
+/// A walk that [`interleaved`] steps: made from a ray at the root, one node visit per
+/// step, then the node it visits next.
+pub(super) trait Walk: Copy {
+    /// The walk of `ray` from the root.
+    fn root(ray: &Ray) -> Self;
+    /// One node visit; `true` when the walk is over.
+    fn step(&mut self, accel: &Accel, bvh: &Bvh8, cull: bool, stack: &mut [(u32, f32)]) -> bool;
+    /// The node the next step visits.
+    fn next(&self) -> u32;
+}
+
+impl Walk for Closest {
+    #[inline(always)]
+    fn root(ray: &Ray) -> Self {
+        Closest::new(RayWide::new(ray), ray.tfar, 0)
+    }
+    #[inline(always)]
+    fn step(&mut self, accel: &Accel, bvh: &Bvh8, cull: bool, stack: &mut [(u32, f32)]) -> bool {
+        Closest::step_deferred(self, accel, bvh, cull, stack)
+    }
+    #[inline(always)]
+    fn next(&self) -> u32 {
+        self.cur
+    }
+}
+
+impl Walk for Any {
+    #[inline(always)]
+    fn root(ray: &Ray) -> Self {
+        Any::new(RayWide::new(ray), ray.tfar, 0)
+    }
+    #[inline(always)]
+    fn step(&mut self, accel: &Accel, bvh: &Bvh8, cull: bool, stack: &mut [(u32, f32)]) -> bool {
+        Any::step_deferred(self, accel, bvh, cull, stack)
+    }
+    #[inline(always)]
+    fn next(&self) -> u32 {
+        self.cur
+    }
+}
