@@ -260,6 +260,50 @@ fn batches_given_by_index() {
     }
 }
 
+/// `wide1`'s batch calls walk scattered rays on a tree larger than the caches interleaved
+/// (the kitten subdivided once: 82k triangles, a 5.8 MiB tree), rays in order and small
+/// trees one after another; either way every hit is `intersect1`'s, bit for bit, and every
+/// occlusion `occluded1`'s, culled and not, whatever the batch's length.
+#[test]
+fn wide1_batches_interleaved_or_not_are_intersect1() {
+    use whitted::accel::{intersect_wide1_many, occluded_wide1_many, occluded1, wide1};
+    let (mesh, small) = kitten();
+    let big_mesh = mesh.subdivide(1);
+    let big = Accel::build(&triangles(&big_mesh), BuildQuality::default());
+    let random = random_rays(&big_mesh, 4000);
+    // rays in order: from one point towards a sweep over the mesh (a beam, origins together)
+    let eye = Vec3::new(1.6, 0.9, 4.4);
+    let aimed: Vec<Ray> = (0..4000)
+        .map(|i| {
+            let v = big_mesh.positions[i * 7 % big_mesh.positions.len()];
+            Ray::new(eye, v - eye, 0.0, f32::INFINITY)
+        })
+        .collect();
+    assert!(wide1::interleaves(&big, &random));
+    assert!(!wide1::interleaves(&big, &aimed));
+    assert!(!wide1::interleaves(&small, &random));
+    assert!(!wide1::interleaves(&big, &random[..15]));
+    let bits = |h: &Option<whitted::ray::Hit>| {
+        h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+    };
+    for (accel, rays) in [(&big, &random), (&big, &aimed), (&small, &random)] {
+        for cull in [false, true] {
+            // (lengths that leave some of the eight walks idle at the end)
+            for n in [rays.len(), 37, 16] {
+                let rays = &rays[..n];
+                let mut hits = vec![None; n];
+                let mut occ = vec![false; n];
+                intersect_wide1_many(accel, rays, cull, &mut hits);
+                occluded_wide1_many(accel, rays, cull, &mut occ);
+                for (k, r) in rays.iter().enumerate() {
+                    assert_eq!(bits(&hits[k]), bits(&intersect1(accel, r, cull)), "ray {k}");
+                    assert_eq!(occ[k], occluded1(accel, r, cull), "ray {k}");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn packet_lanes_that_can_hit_nothing() {
     let ok = Ray::new(Vec3::ZERO, Vec3::Z, 0.0, f32::INFINITY);

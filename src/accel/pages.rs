@@ -9,8 +9,8 @@
 //! huge pages are `always` or `never` this changes nothing; elsewhere than Linux it does
 //! nothing.
 //!
-//! One of the crate's two `unsafe` places (the other: `packet16`'s AVX-512 dispatch), kept to
-//! the system call.
+//! One of the crate's three `unsafe` places (the others: `packet16`'s AVX-512 dispatch and
+//! `wide1::interleave`'s prefetch hint), kept to the system call.
 
 /// Arrays smaller than this stay on small pages (a huge page is 2 MiB).
 const MIN_BYTES: usize = 4 << 20;

@@ -242,16 +242,28 @@ pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
 }
 
 /// `intersect_wide1` on every ray of `rays`, into `out` (the same length): the same answers,
-/// the walks interleaved eight at a time with each one's next node and leaf blocks
-/// prefetched (`interleave`; docs/engines.md has the measurements), the thread's stack
-/// borrowed once for the batch.
+/// the thread's stack borrowed once for the batch. Scattered rays on a tree larger than the
+/// caches are walked eight at a time in turn, each one's next node and leaf blocks
+/// prefetched (`interleave`, which says when; docs/engines.md has the measurements).
 ///
 /// # Panics
 /// If `out` is shorter than `rays`.
 pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
     let out = &mut out[..rays.len()];
     out.fill(None);
-    interleaved_batch(accel, rays, cull, |i, w: &Closest| out[i] = w.best);
+    if interleave::worth_it(accel, rays) {
+        interleaved_batch(accel, rays, cull, |i, w: &Closest| out[i] = w.best);
+    } else {
+        walk_each::<false>(accel, rays.iter().copied().enumerate(), cull, |i, h| {
+            out[i] = Some(h)
+        });
+    }
+}
+
+/// Whether [`intersect_wide1_many`] and [`occluded_wide1_many`] walk `rays` interleaved
+/// (scattered rays on a tree larger than the caches; see `interleave`).
+pub fn interleaves(accel: &Accel, rays: &[Ray]) -> bool {
+    interleave::worth_it(accel, rays)
 }
 
 /// `occluded_wide1` on every ray of `rays`, into `out` (the same length), interleaved as
@@ -262,12 +274,18 @@ pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [
 pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [bool]) {
     let out = &mut out[..rays.len()];
     out.fill(false);
-    interleaved_batch(accel, rays, cull, |i, w: &Any| out[i] = w.hit.is_some());
+    if interleave::worth_it(accel, rays) {
+        interleaved_batch(accel, rays, cull, |i, w: &Any| out[i] = w.hit.is_some());
+    } else {
+        walk_each::<true>(accel, rays.iter().copied().enumerate(), cull, |i, _| {
+            out[i] = true
+        });
+    }
 }
 
 /// One walk from the root per `(index, ray)`, the thread's stack borrowed once for all of
-/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree): the packets'
-/// per-lane calls (`intersect_wide8`, `occluded_wide8`).
+/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree). What the batch
+/// entries (rays in order, or a tree the caches hold) and the packets' per-lane calls share.
 #[inline(always)]
 fn walk_each<const ANY_HIT: bool>(
     accel: &Accel,
