@@ -9,7 +9,7 @@
 //!
 //! | the batch's 16-ray groups | candidates (AVX-512) | candidates (without) |
 //! |---|---|---|
-//! | one octant, directions within a few degrees (camera, shadow rays to a point light) | `packet16`, `hybrid16` | `hybrid8`, `packet8` |
+//! | one octant, directions within a few degrees (camera, shadow rays to a point light) | `packet16`, `hybrid16` | `hybrid8`, `wide1` |
 //! | directions apart, origins close together (bounces off neighbouring hits) | `hybrid16`, `wide1` | `hybrid8`, `wide1` |
 //! | directions and origins apart (random rays, lidar, inside/outside tests) | `wide1` | `wide1` |
 //!
@@ -206,10 +206,14 @@ impl Choice {
 }
 
 /// The candidates for a batch by its [`Spread`] (the table of the module doc):
-/// - beams: `packet16` and `hybrid16` (AVX-512), or `hybrid8` and `packet8`. Camera rays
+/// - beams: `packet16` and `hybrid16` (AVX-512), or `hybrid8` and `wide1`. Camera rays
 ///   from one eye go fastest in 16-ray packets; beams from many origins (shadow rays, the
 ///   camera rays that hit) go as fast or faster with `hybrid16` on large meshes (1.3M
-///   triangles: shadow 6.0 against 4.8 Mrays/s), where the lanes part sooner;
+///   triangles: shadow 6.0 against 4.8 Mrays/s), where the lanes part sooner. Without
+///   AVX-512 `packet8` is never far ahead of `hybrid8` (AMD Zen 3: 0.97-1.01x of it on the
+///   bench's beams at 20k, 1.3M and 5.2M triangles), while at 5.2M `wide1` leads on the
+///   camera rays' hits (2.71 against 2.50 Mrays/s) and their shadow rays (2.97 against
+///   2.64), where the packets' lanes part at once;
 /// - scattered directions from origins close together: `hybrid16` and `wide1` (AVX-512), or
 ///   `hybrid8` and `wide1` (on the kitten the hybrid leads, at 1.3M triangles `wide1` by a
 ///   little);
@@ -226,7 +230,7 @@ pub fn candidates(s: Spread, avx512: bool) -> Choice {
         )
     } else {
         (
-            [Engine::Hybrid, Engine::Packet],
+            [Engine::Hybrid, Engine::Wide],
             [Engine::Hybrid, Engine::Wide],
         )
     };

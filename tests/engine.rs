@@ -342,7 +342,7 @@ fn candidates_by_kind_of_batch() {
     );
     assert_eq!(
         candidates(s(1e-5, 0.0), false),
-        Choice::Try([Engine::Hybrid, Engine::Packet])
+        Choice::Try([Engine::Hybrid, Engine::Wide])
     );
     assert_eq!(
         candidates(s(0.9, 0.01), true),
