@@ -4,7 +4,8 @@
 
 use super::Accel;
 use super::robust::nearer;
-use super::wide1::{Lanes, RayWide, STACK, grow_stack, walk};
+use super::stack::{STACK, grow_stack};
+use super::wide1::{Lanes, RayWide, walk};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;
 use crate::simd::{self, F32x8, M32x8};

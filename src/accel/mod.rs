@@ -11,8 +11,8 @@
 //! | BVH2, then BVH8 per lane | - | `hybrid8` (`packet`'s walk, `hand_off` the switch) | `packet16`: `intersect_hybrid16` |
 //!
 //! Each has its `occluded*` twin (any hit). Shared by all: the robustness constants and the
-//! closest-hit rule (`robust`), the SoA triangle columns (`tri_soa`), the builders
-//! (`build`, `wide`).
+//! closest-hit rule (`robust`), the traversal stacks (`stack`), the SoA triangle columns
+//! (`tri_soa`), the builders (`build`, `wide`).
 
 pub mod build;
 mod hand_off;
@@ -22,6 +22,7 @@ pub mod packet16;
 pub mod pages;
 pub mod robust;
 pub mod scalar;
+mod stack;
 pub mod tri_soa;
 pub mod wide;
 pub mod wide1;

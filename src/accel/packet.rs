@@ -223,7 +223,7 @@ pub(super) fn traverse8<const ANY_HIT: bool, const SWITCH: u32>(
     let mut tfar = rays.tfar;
     let dlen = simd::sqrt(rays.d.dot(rays.d));
     // entries: a node and the bits of the lanes that met its box when it was pushed.
-    let mut stack: super::scalar::Stack<(u32, u32), 64> = super::scalar::Stack::new();
+    let mut stack: super::stack::Stack<(u32, u32), 64> = super::stack::Stack::new();
     let mut lanes = None;
     let mut node = 0u32;
     // Hybrid: when the active lanes share one direction octant, near and far planes are

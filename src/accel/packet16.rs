@@ -17,10 +17,11 @@
 use super::hybrid8::{intersect_hybrid8, occluded_hybrid8};
 use super::packet::{intersect8, occluded8};
 use super::robust::{BARY_SAFE, nearer};
-use super::scalar::{Stack, inside_f64};
+use super::scalar::inside_f64;
+use super::stack::{STACK, Stack, grow_stack};
 use super::tri_soa::Leaf;
 use super::wide::NO_ENTRY;
-use super::wide1::{RayWide, STACK, grow_stack, walk};
+use super::wide1::{RayWide, walk};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::Hit;

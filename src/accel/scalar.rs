@@ -7,6 +7,7 @@
 
 use super::Accel;
 use super::robust::{BARY_SAFE, SLAB_FAR_SCALE, nearer, safe_inv};
+use super::stack::Stack;
 use crate::ray::{Hit, Ray};
 
 #[inline(always)]
@@ -148,44 +149,6 @@ fn hit_box1(
         hi = hi.min(t0.max(t1));
     }
     (lo <= hi * SLAB_FAR_SCALE).then_some(lo)
-}
-
-/// Fixed-size traversal stack with a heap spill for pathological trees.
-pub(crate) struct Stack<T: Copy, const N: usize> {
-    items: [T; N],
-    len: usize,
-    spill: Vec<T>,
-}
-
-impl<T: Copy + Default, const N: usize> Stack<T, N> {
-    #[inline(always)]
-    pub(crate) fn new() -> Self {
-        Stack {
-            items: [T::default(); N],
-            len: 0,
-            spill: Vec::new(),
-        }
-    }
-    #[inline(always)]
-    pub(crate) fn push(&mut self, v: T) {
-        if self.len < N {
-            self.items[self.len] = v;
-            self.len += 1;
-        } else {
-            self.spill.push(v);
-        }
-    }
-    #[inline(always)]
-    pub(crate) fn pop(&mut self) -> Option<T> {
-        if let Some(v) = self.spill.pop() {
-            return Some(v);
-        }
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        Some(self.items[self.len])
-    }
 }
 
 /// One traversal for closest hit and any hit (`ANY_HIT` stops at the first hit).

@@ -15,14 +15,15 @@ mod walk;
 
 use super::robust::{BARY_SAFE, nearer};
 use super::scalar::inside_f64;
+use super::stack::{STACK, grow_stack};
 use super::wide::{Bvh8, Node8, TriBlock8};
 use super::{Accel, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::{Hit, Ray};
 use crate::simd::{self, F32x8, M32x8, Vec3x8};
 use interleave::interleaved_batch;
+pub(super) use walk::walk;
 use walk::{Any, Closest};
-pub(super) use walk::{STACK, grow_stack, walk};
 
 /// A ray splatted across lanes for the wide kernels, with what the slab test needs.
 #[derive(Clone, Copy, Debug)]

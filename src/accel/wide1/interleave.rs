@@ -3,8 +3,9 @@
 //! one walk waits on memory the core works on the others.
 
 use super::RayWide;
-use super::walk::{Any, Closest, STACK, stack_need};
+use super::walk::{Any, Closest};
 use crate::accel::Accel;
+use crate::accel::stack::{STACK, stack_need};
 use crate::accel::wide::{Bvh8, Node8, TriBlock8, leaf_blocks};
 use crate::ray::Ray;
 

@@ -1,6 +1,6 @@
 //! The single-ray walks of the 8-wide tree, closest hit and any hit, as steps (one node
 //! visit each) over a walk's state, so that [`super::interleave`] can take several walks in
-//! turn; [`walk`] runs one to its end. The traversal stack lives here too.
+//! turn; [`walk`] runs one to its end (with a stack of `accel::stack`).
 
 use super::interleave::prefetch_leaf;
 use super::{NodeHits, RayWide, hit_block1, hit_node1};
@@ -9,32 +9,10 @@ use crate::accel::wide::{Bvh8, LEAF_BIT, Node8, leaf_blocks};
 use crate::accel::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
 use crate::ray::Hit;
 
-/// Traversal stack entries a walk of `bvh` needs: each node level leaves at most 7 entries
-/// behind, and a node writes at most 8 slots at once (the closest-hit walk's octant pass
-/// writes all of them).
-pub(super) fn stack_need(bvh: &Bvh8) -> usize {
-    bvh.depth * 7 + 8
-}
-
-/// Grow the thread's traversal `stack` to what a walk of `bvh` needs ([`stack_need`]), for
-/// every user of [`STACK`].
-#[inline(always)]
-pub(in crate::accel) fn grow_stack(stack: &mut Vec<(u32, f32)>, bvh: &Bvh8) {
-    let need = stack_need(bvh);
-    if stack.len() < need {
-        stack.resize(need, (0, 0.0));
-    }
-}
-
-thread_local! {
-    /// Traversal stack of this thread, grown to the deepest tree seen (so a ray allocates
-    /// nothing and clears nothing).
-    pub(in crate::accel) static STACK: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
 /// Single-ray traversal of the subtree at wide reference `start` (a node or a leaf): the
 /// nearest hit with `tnear < t < tfar` ([`walk_closest`]), or with `ANY_HIT` the first
-/// ([`walk_any`]). `stack` holds at least [`stack_need`] entries.
+/// ([`walk_any`]). `stack` holds at least [`stack_need`](crate::accel::stack::stack_need)
+/// entries.
 #[inline(always)]
 pub(in crate::accel) fn walk<const ANY_HIT: bool>(
     accel: &Accel,
