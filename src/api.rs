@@ -8,7 +8,7 @@
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::io::image::save_image;
-use crate::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
+use crate::io::scene::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
 use crate::render::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, World};
 use crate::scene::Scene;
 use crate::scenes;
@@ -20,7 +20,7 @@ pub const MAX_SPP: u32 = 4096;
 impl Scene {
     /// A built-in scene by name (one of [`scenes::NAMES`]: the five canonical scenes and
     /// `demo`), loaded from the data shipped with whitted (see
-    /// [`PROJECT_DATA`](crate::io::scene_file::PROJECT_DATA)), at its default size. Loader
+    /// [`PROJECT_DATA`](crate::io::scene::PROJECT_DATA)), at its default size. Loader
     /// warnings are dropped; [`scenes::builtin`] and [`build_scene`] return them.
     pub fn builtin(name: &str) -> Result<Scene> {
         let file = scenes::builtin(name).ok_or_else(|| {

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{IMAGE_EXTENSIONS, ImageInfo, decode_texture, load_cubemap_info};
-use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::scene::{SceneFile, SearchPath, build_scene};
 use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::mesh::Mesh;
 use crate::scene::Background;
@@ -307,7 +307,7 @@ pub fn run_arg(arg: &str, defines: &[String], as_json: bool) -> Result<String> {
     };
     let file = file.with_overrides(defines)?;
     let info = scene_file_info(&file, Path::new(&name), dir)
-        .map_err(|e| crate::io::scene_file::name_overrides(e, defines))?;
+        .map_err(|e| crate::io::scene::name_overrides(e, defines))?;
     Ok(if as_json {
         info.to_json() + "\n"
     } else {

@@ -5,7 +5,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
-use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
+use whitted::io::scene::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
 use whitted::render::{Settings, Stage, World};
 use whitted::{Error, Result, scenes};
 
@@ -239,7 +239,7 @@ fn parse_exr_options(half: bool, compression: &str) -> Result<whitted::io::outpu
 /// `--subdivide k` on meshes of `triangles` in all: refused before anything is allocated when
 /// it would pass the scene's triangle cap.
 fn check_subdivided_triangles(k: u32, triangles: u64) -> Result<()> {
-    use whitted::io::scene_file::MAX_SCENE_TRIANGLES;
+    use whitted::io::scene::MAX_SCENE_TRIANGLES;
     let made = triangles.saturating_mul(1u64 << (2 * k.min(16)));
     if made > MAX_SCENE_TRIANGLES {
         return Err(Error::Usage(format!(
@@ -269,10 +269,10 @@ fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
 }
 
 fn check_subdivide(k: u32) -> Result<()> {
-    if k > whitted::io::scene_file::MAX_SUBDIVIDE {
+    if k > whitted::io::scene::MAX_SUBDIVIDE {
         return Err(Error::Usage(format!(
             "--subdivide {k} is over the cap of {}",
-            whitted::io::scene_file::MAX_SUBDIVIDE
+            whitted::io::scene::MAX_SUBDIVIDE
         )));
     }
     Ok(())
@@ -443,7 +443,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             .map_err(|m| Error::Usage(format!("--width/--height: {m}")))?
     } else {
         file.image_size(&path)
-            .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?
+            .map_err(|e| whitted::io::scene::name_overrides(e, &args.define))?
     };
     let stage = match &args.stage {
         None => None,
@@ -506,9 +506,8 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let exr = parse_exr_options(args.half, &args.exr_compression)?;
     // A value set by -D names the argument too.
     let load_start = std::time::Instant::now();
-    let (mut scene, warnings) =
-        build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
-            .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?;
+    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
+        .map_err(|e| whitted::io::scene::name_overrides(e, &args.define))?;
     check_subdivided_triangles(args.subdivide, scene.triangle_count() as u64)?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);

@@ -648,7 +648,7 @@ fn build_ref(
     od: &str,
     mesh: &str,
 ) -> whitted::Result<(whitted::scene::Scene, Vec<String>)> {
-    use whitted::io::scene_file::{SceneFile, SearchPath, build_scene};
+    use whitted::io::scene::{SceneFile, SearchPath, build_scene};
     let text = REF_SCENE
         .replace("{BG}", bg)
         .replace("{OD}", od)
@@ -770,7 +770,7 @@ fn missing_file_lists_every_folder_searched() {
     );
     assert!(e.starts_with(&want), "want {want:?}\n got {e:?}");
     assert!(
-        e.ends_with(whitted::io::scene_file::PROJECT_DATA),
+        e.ends_with(whitted::io::scene::PROJECT_DATA),
         "the project's data folder ends the search path: {e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
@@ -827,9 +827,9 @@ fn partial_vertex_attributes_load_and_take_the_materials_colour() {
 /// were built one by one before the caps were checked.
 #[test]
 fn caps_are_checked_before_generating_shapes() {
-    use whitted::io::scene_file::MAX_SCENE_TRIANGLES;
+    use whitted::io::scene::MAX_SCENE_TRIANGLES;
     use whitted::scene::shapes::sphere_triangle_count;
-    let per = sphere_triangle_count(whitted::io::scene_file::SPHERE_SEGMENTS);
+    let per = sphere_triangle_count(whitted::io::scene::SPHERE_SEGMENTS);
     assert_eq!(per, 9024);
     assert!(3719 * per > MAX_SCENE_TRIANGLES && 3718 * per <= MAX_SCENE_TRIANGLES);
     let sphere = "[[mesh]]\nmaterial = \"m\"\nshape = \"sphere\"\n";

@@ -541,7 +541,7 @@ impl PyScene {
     #[new]
     #[pyo3(signature = (source, defines=Vec::new()))]
     fn new(py: Python<'_>, source: &str, defines: Vec<String>) -> PyResult<Self> {
-        use whitted::io::scene_file::{SceneFile, SearchPath, build_scene};
+        use whitted::io::scene::{SceneFile, SearchPath, build_scene};
         let load = || -> whitted::Result<(whitted::Scene, Vec<String>)> {
             let path = Path::new(source);
             let (file, label, dir, mut warnings) =
@@ -561,7 +561,7 @@ impl PyScene {
             Ok((scene, warnings))
         };
         let (scene, warnings) = py.detach(load).map_err(|e| {
-            let named = whitted::io::scene_file::overrides_named(&e.to_string(), &defines);
+            let named = whitted::io::scene::overrides_named(&e.to_string(), &defines);
             if named.is_empty() {
                 whitted_error("scene", e)
             } else {
@@ -638,7 +638,7 @@ impl PyScene {
         let (image, layers) = py
             .detach(|| {
                 on_pool(threads, || -> whitted::Result<_> {
-                    whitted::io::scene_file::check_size(scene.width as u64, scene.height as u64)
+                    whitted::io::scene::check_size(scene.width as u64, scene.height as u64)
                         .map_err(Error::Usage)?;
                     let world = whitted::render::World::new(scene);
                     let image = world.render_image(&settings)?;

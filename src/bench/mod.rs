@@ -222,7 +222,7 @@ pub fn run(opts: &Options) -> crate::Result<()> {
     if meshes.is_empty() {
         // the kitten, found as a scene file finds it: the current folder, the WHITTED_ASSETS
         // folders, then the copy whitted ships.
-        meshes.push(crate::io::scene_file::SearchPath::for_scene(None).resolve("meshes/kitten.m")?);
+        meshes.push(crate::io::scene::SearchPath::for_scene(None).resolve("meshes/kitten.m")?);
     }
     let mut reports = vec![];
     for m in &meshes {

@@ -4,7 +4,8 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{decode_cubemap_capped, decode_texture_capped};
-use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::model::NO_MATERIAL;
+use crate::io::scene::{SceneFile, SearchPath, build_scene};
 use crate::io::{mfile, obj, ply};
 use std::path::{Path, PathBuf};
 
@@ -45,7 +46,7 @@ pub fn obj_mtl(data: &[u8]) -> Result<()> {
         assert_eq!(f.len(), model.mesh.triangles.len());
         assert!(
             f.iter()
-                .all(|&m| m == obj::NO_MATERIAL || (m as usize) < model.materials.len())
+                .all(|&m| m == NO_MATERIAL || (m as usize) < model.materials.len())
         );
     }
     Ok(())

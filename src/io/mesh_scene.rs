@@ -12,7 +12,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::load_model;
-use crate::io::scene_file::{
+use crate::io::scene::{
     BackgroundDesc, CameraDesc, ImageDesc, LightDesc, MeshDesc, RenderDesc, SceneFile,
 };
 use glam::Vec3;

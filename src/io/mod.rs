@@ -6,16 +6,18 @@ pub mod image;
 pub mod merge;
 pub mod mesh_scene;
 pub mod mfile;
+pub mod model;
 pub mod mtl;
 pub mod obj;
 pub mod output;
 pub mod ply;
 pub mod rays;
-pub mod scene_file;
+pub mod scene;
 
 use crate::error::{Error, Result};
+use crate::io::model::Model;
 use crate::mesh::Mesh;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Largest file any loader reads (mesh, texture, scene): 4 GiB, checked before reading.
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
@@ -56,18 +58,10 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
 }
 
 /// Load a mesh with the materials its file brings (OBJ: `mtllib`), by extension.
-pub fn load_model(path: &Path) -> Result<(obj::Model, Vec<String>)> {
+pub fn load_model(path: &Path) -> Result<(Model, Vec<String>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path),
-        _ => load_mesh(path).map(|(mesh, w)| {
-            (
-                obj::Model {
-                    mesh,
-                    ..Default::default()
-                },
-                w,
-            )
-        }),
+        _ => load_mesh(path).map(|(mesh, w)| (Model::plain(mesh), w)),
     }
 }
 
@@ -101,19 +95,10 @@ pub fn load_scene_mesh(path: &Path) -> Result<(Mesh, Vec<String>, Vec<u32>)> {
 
 /// [`load_model`] for a scene: also the vertices a `.m` file left without `rgb` where others
 /// have one (see [`load_scene_mesh`]).
-pub fn load_scene_model(path: &Path) -> Result<(obj::Model, Vec<String>, Vec<u32>)> {
+pub fn load_scene_model(path: &Path) -> Result<(Model, Vec<String>, Vec<u32>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path).map(|(m, w)| (m, w, Vec::new())),
-        _ => load_scene_mesh(path).map(|(mesh, w, missing)| {
-            (
-                obj::Model {
-                    mesh,
-                    ..Default::default()
-                },
-                w,
-                missing,
-            )
-        }),
+        _ => load_scene_mesh(path).map(|(mesh, w, missing)| (Model::plain(mesh), w, missing)),
     }
 }
 
@@ -195,6 +180,21 @@ pub(crate) fn finish_mesh(mesh: &mut Mesh, path: &Path, warnings: &mut Vec<Strin
             "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
             path.display()
         ));
+    }
+}
+
+/// `dir/name` if it exists.
+pub(crate) fn find_beside(dir: &Path, name: &str) -> Option<PathBuf> {
+    let p = dir.join(name);
+    p.is_file().then_some(p)
+}
+
+/// A folder for messages: `.` for the empty path of a file named without one.
+pub(crate) fn display_dir(dir: &Path) -> String {
+    if dir.as_os_str().is_empty() {
+        ".".into()
+    } else {
+        dir.display().to_string()
     }
 }
 

@@ -9,28 +9,12 @@
 //! an MTL file, and it had to be fed a validated rewrite of the file anyway.)
 
 use crate::error::{Error, Result};
-use crate::io::mtl::{self, MtlInfo};
-use crate::io::scene_file::MaterialDesc;
+use crate::io::model::{Model, NO_MATERIAL};
+use crate::io::mtl;
 use crate::mesh::Mesh;
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-
-/// A mesh with the materials its file brings.
-#[derive(Clone, Debug, Default)]
-pub struct Model {
-    /// Its triangles.
-    pub mesh: Mesh,
-    /// Materials of the file (MTL), already mapped onto whitted's terms.
-    pub materials: Vec<MaterialDesc>,
-    /// What each MTL material said and which textures were found (for `whitted info`).
-    pub material_info: Vec<MtlInfo>,
-    /// Per triangle, an index into `materials`, or [`NO_MATERIAL`] (`None`: no face has one).
-    pub face_materials: Option<Vec<u32>>,
-}
-
-/// A triangle whose face group named no (known) material.
-pub const NO_MATERIAL: u32 = u32::MAX;
+use std::path::Path;
 
 /// Read and load an OBJ file ([`parse_obj`] on its bytes).
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
@@ -59,38 +43,24 @@ pub fn load_obj_model(path: &Path) -> Result<(Model, Vec<String>)> {
     parse_obj_model(&bytes, path, &mut |line, entry, warnings| {
         // `mtllib a.mtl b.mtl` names two files, `mtllib my materials.mtl` one with a space:
         // the whole entry when such a file exists, else each word.
-        let names: Vec<&str> = if find_beside(&dir, entry).is_some() {
+        let names: Vec<&str> = if super::find_beside(&dir, entry).is_some() {
             vec![entry]
         } else {
             entry.split_whitespace().collect()
         };
         let mut out = Vec::new();
         for name in names {
-            match find_beside(&dir, name) {
+            match super::find_beside(&dir, name) {
                 Some(file) => out.extend(mtl::parse_mtl(&super::read_regular(&file)?, &file)?),
                 None => warnings.push(format!(
                     "{}:{line}: mtllib '{name}' not found in {}; its materials fall back to the default",
                     path.display(),
-                    display_dir(&dir)
+                    super::display_dir(&dir)
                 )),
             }
         }
         Ok(out)
     })
-}
-
-/// `dir/name` if it exists.
-pub(crate) fn find_beside(dir: &Path, name: &str) -> Option<PathBuf> {
-    let p = dir.join(name);
-    p.is_file().then_some(p)
-}
-
-pub(crate) fn display_dir(dir: &Path) -> String {
-    if dir.as_os_str().is_empty() {
-        ".".into()
-    } else {
-        dir.display().to_string()
-    }
 }
 
 /// Reads the materials of one `mtllib` statement: `(line, rest of the line, warnings)`.

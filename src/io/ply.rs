@@ -9,7 +9,7 @@
 //! the line (header, ASCII body) or the byte offset (binary body).
 
 use crate::error::{Error, Result};
-use crate::io::scene_file::MAX_SCENE_TRIANGLES;
+use crate::io::scene::schema::MAX_SCENE_TRIANGLES;
 use crate::mesh::Mesh;
 use glam::{Vec2, Vec3};
 use std::path::Path;
