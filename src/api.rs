@@ -34,7 +34,7 @@ impl Scene {
     }
 
     /// A TOML scene file, validated, with every file it names loaded (relative names resolve
-    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`),
+    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`, `.stl`),
     /// framed at 1024x768 as `whitted render model.obj` frames it (see
     /// [`scene_for_mesh`](crate::io::mesh_scene::scene_for_mesh)). Loader warnings are
     /// dropped; [`SceneFile::load`] and [`build_scene`] return them.

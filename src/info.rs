@@ -52,7 +52,7 @@ impl Info {
     }
 }
 
-/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` a mesh, `.toml` a scene, anything
+/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` / `.stl` a mesh, `.toml` a scene, anything
 /// else an image. Errors are the loaders' one-line errors.
 pub fn info(path: &Path) -> Result<Info> {
     if path.is_dir() {

@@ -101,6 +101,16 @@ fn fuzz_corpus_ply() {
 }
 
 #[test]
+fn fuzz_corpus_stl() {
+    let mut n = 0;
+    for (p, data) in corpus("stl") {
+        n += 1;
+        fuzz::stl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(n >= 3);
+}
+
+#[test]
 fn fuzz_corpus_obj_mtl() {
     for (p, data) in corpus("obj_mtl") {
         fuzz::obj_mtl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
@@ -682,7 +692,7 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
             "meshes/bad.m".into(),
             b"Vertex 1 0 0 0\nVertex 2 NaN 0 0\n".to_vec(),
         ),
-        ("meshes/shape.stl".into(), b"solid x\n".to_vec()),
+        ("meshes/shape.3ds".into(), b"MM".to_vec()),
         ("meshes/folder.m/".into(), vec![]),
         ("tex/folder.png/".into(), vec![]),
         ("sky/".into(), vec![]),
@@ -710,9 +720,9 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
         (
             COLOR_BG,
             COLOR_OD,
-            "file = \"meshes/shape.stl\"",
+            "file = \"meshes/shape.3ds\"",
             format!(
-                "{s}:22: mesh[1].file: {d}/meshes/shape.stl: unknown mesh format '.stl'; mesh files are .m, .obj, .ply"
+                "{s}:22: mesh[1].file: {d}/meshes/shape.3ds: unknown mesh format '.3ds'; mesh files are .m, .obj, .ply, .stl"
             ),
         ),
         (
@@ -863,12 +873,12 @@ fn caps_are_checked_before_generating_shapes() {
 /// `whitted info` on a file type it does not read says which types it does.
 #[test]
 fn info_on_an_unknown_file_type_lists_the_types() {
-    let dir = scene_dir("info", &[("x.stl", b"solid x\nendsolid x\n")]);
-    let e = whitted::info::run(&dir.join("x.stl"), false)
+    let dir = scene_dir("info", &[("x.3ds", b"MM")]);
+    let e = whitted::info::run(&dir.join("x.3ds"), false)
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("x.stl: not a file type whitted reads; it reads meshes (.m, .obj, .ply), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
+        e.contains("x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);

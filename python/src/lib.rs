@@ -200,7 +200,7 @@ impl Raycaster {
         Ok(self.add(&positions, &tris))
     }
 
-    /// Add the mesh in a file whitted reads (`.m`, `.obj`, `.ply`); returns its id and the
+    /// Add the mesh in a file whitted reads (`.m`, `.obj`, `.ply`, `.stl`); returns its id and the
     /// loader's warnings.
     fn add_mesh(&mut self, py: Python<'_>, path: PathBuf) -> PyResult<(u32, Vec<String>)> {
         let (mesh, warnings) = py

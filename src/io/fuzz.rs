@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::io::image::{decode_cubemap_capped, decode_texture_capped};
 use crate::io::model::NO_MATERIAL;
 use crate::io::scene::{SceneFile, SearchPath, build_scene};
-use crate::io::{mfile, obj, ply};
+use crate::io::{mfile, obj, ply, stl};
 use std::path::{Path, PathBuf};
 
 /// The `.m` reader on arbitrary bytes.
@@ -26,6 +26,13 @@ pub fn obj(data: &[u8]) -> Result<()> {
 /// The PLY reader (ASCII and binary) on arbitrary bytes.
 pub fn ply(data: &[u8]) -> Result<()> {
     let (mesh, _) = ply::parse_ply(data, Path::new("fuzz.ply"))?;
+    check_mesh(&mesh);
+    Ok(())
+}
+
+/// The STL reader (ASCII and binary) on arbitrary bytes.
+pub fn stl(data: &[u8]) -> Result<()> {
+    let (mesh, _) = stl::parse_stl(data, Path::new("fuzz.stl"))?;
     check_mesh(&mesh);
     Ok(())
 }

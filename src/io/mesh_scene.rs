@@ -1,4 +1,4 @@
-//! `whitted render model.obj|.ply|.m`: the scene a mesh file gets when it is rendered alone.
+//! `whitted render model.obj|.ply|.stl|.m`: the scene a mesh file gets when it is rendered alone.
 //!
 //! The camera looks at the centre of the bounding box from the canonical scenes' direction
 //! (SCENES.md §5: `eye - look_at = (1.6, 1.05, 4.4)`, to the front, right and above), far

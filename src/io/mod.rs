@@ -1,4 +1,4 @@
-//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`), scenes (TOML), images.
+//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`, `.stl`), scenes (TOML), images.
 
 pub mod aov;
 pub mod fuzz;
@@ -13,6 +13,7 @@ pub mod output;
 pub mod ply;
 pub mod rays;
 pub mod scene;
+pub mod stl;
 
 use crate::error::{Error, Result};
 use crate::io::model::Model;
@@ -23,7 +24,7 @@ use std::path::{Path, PathBuf};
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
 
 /// Mesh file extensions the loaders read, in lower case (a mesh's format is its extension).
-pub const MESH_EXTENSIONS: [&str; 3] = ["m", "obj", "ply"];
+pub const MESH_EXTENSIONS: [&str; 4] = ["m", "obj", "ply", "stl"];
 
 /// Check that `path` is a regular file under [`MAX_FILE_BYTES`], without reading it: folders,
 /// devices and FIFOs (`/dev/zero` would never end) are refused.
@@ -65,7 +66,7 @@ pub fn load_model(path: &Path) -> Result<(Model, Vec<String>)> {
     }
 }
 
-/// Load a mesh by extension (`.m`, `.obj` or `.ply`); warnings are returned beside it.
+/// Load a mesh by extension (`.m`, `.obj`, `.ply` or `.stl`); warnings are returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
     load_mesh_detail(path).map(|(m, w, _)| (m, w))
 }
@@ -78,6 +79,7 @@ pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
         "m" => mfile::parse_m_detail,
         "obj" => obj::parse_obj_detail,
         "ply" => ply::parse_ply_detail,
+        "stl" => stl::parse_stl_detail,
         _ => return Err(unknown_mesh_type(path)),
     };
     parse(&read_regular(path)?, path)

@@ -108,7 +108,8 @@ fn apply_override(root: &mut toml::Value, def: &str) -> std::result::Result<(), 
 
 impl SceneFile {
     /// Apply `-D key=value` overrides in order, each checked as the file is (unknown keys,
-    /// types); errors name the `-D` argument. Values are validated by [`build_scene`](super::build_scene).
+    /// types); errors name the `-D` argument. Values are validated by
+    /// [`build_scene`](super::build_scene).
     pub fn with_overrides(&self, defs: &[String]) -> Result<SceneFile> {
         if defs.is_empty() {
             return Ok(self.clone());
