@@ -1,5 +1,6 @@
-//! STL end to end: the shipped ASCII and binary cubes render, trace and inspect alike, and a
-//! broken STL is one error line naming the file and where, with exit code 2.
+//! STL end to end: the shipped ASCII and binary cubes render, trace and inspect alike (and
+//! like the flat-shaded `cube.obj`), and a broken STL is one error line naming the file and
+//! where, with exit code 2.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -137,4 +138,34 @@ fn broken_stl_is_one_error_line() {
             "{want:?}: {err}"
         );
     }
+}
+
+/// Flat shading as the formats mean it: `cube.obj` (no `vn`, no smoothing groups) renders
+/// exactly as the STL cube, six flat faces; `smooth = true` rounds it into another image.
+#[test]
+fn cube_obj_is_flat_like_the_stl_cube() {
+    let (obj, stl, smooth) = (tmp("cube_obj.png"), tmp("cube_stl.png"), tmp("smooth.png"));
+    render("meshes/cube.obj", &obj);
+    render("meshes/cube.stl", &stl);
+    let (code, _, err) = whitted(&[
+        "render",
+        "meshes/cube.obj",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "-D",
+        "mesh[0].smooth=true",
+        "-o",
+        smooth.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let bytes = |p: &Path| image::open(p).unwrap().into_bytes();
+    assert_eq!(bytes(&obj), bytes(&stl));
+    assert_ne!(bytes(&obj), bytes(&smooth));
+    let (_, out, _) = whitted(&["info", "meshes/cube.obj"]);
+    assert!(
+        out.contains("vertices: 24\n"),
+        "a vertex per face corner: {out}"
+    );
 }

@@ -100,7 +100,21 @@ pub fn load_scene_mesh(path: &Path) -> Result<(Mesh, Vec<String>, Vec<u32>)> {
 pub fn load_scene_model(path: &Path) -> Result<(Model, Vec<String>, Vec<u32>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path).map(|(m, w)| (m, w, Vec::new())),
-        _ => load_scene_mesh(path).map(|(mesh, w, missing)| (Model::plain(mesh), w, missing)),
+        "m" => {
+            let r = mfile::read_m(&read_regular(path)?, path)?;
+            let model = Model {
+                file_normals: r.file_normals,
+                ..Model::plain(r.mesh)
+            };
+            Ok((model, r.warnings, r.missing_rgb))
+        }
+        _ => load_mesh_detail(path).map(|(mesh, w, file_normals)| {
+            let model = Model {
+                file_normals,
+                ..Model::plain(mesh)
+            };
+            (model, w, Vec::new())
+        }),
     }
 }
 

@@ -19,10 +19,15 @@ pub struct Model {
     pub material_info: Vec<MtlInfo>,
     /// Per triangle, an index into `materials`, or [`NO_MATERIAL`] (`None`: no face has one).
     pub face_materials: Option<Vec<u32>>,
+    /// Whether the mesh's normals are the file's own (a scene's `smooth = true` keeps them);
+    /// otherwise the loader made them as the format means (flat, smoothing groups, or
+    /// averaged for `.m`).
+    pub file_normals: bool,
 }
 
 impl Model {
-    /// A model of a mesh alone (a file format without materials, or a generated shape).
+    /// A model of a mesh alone (a file format without materials, or a generated shape), its
+    /// normals not the file's.
     pub fn plain(mesh: Mesh) -> Model {
         Model {
             mesh,

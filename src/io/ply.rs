@@ -571,6 +571,12 @@ pub fn parse_ply_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>,
         mesh.colors = Some(colors);
     }
     super::finish_mesh(&mut mesh, path, &mut warnings);
+    // Without `nx ny nz` a PLY mesh is shaded flat, as the format means it.
+    let mesh = if file_normals {
+        mesh
+    } else {
+        mesh.flat_shaded()
+    };
     Ok((mesh, warnings, file_normals))
 }
 
@@ -655,6 +661,26 @@ mod tests {
         assert_eq!(m.uvs.as_ref().unwrap()[2], Vec2::new(1.0, 1.0));
         let c = m.colors.unwrap();
         assert_eq!((c[0], c[3]), (Vec3::X, Vec3::ONE));
+    }
+
+    /// Without `nx ny nz` a fold keeps its two flat faces; with them, the file's normals.
+    #[test]
+    fn without_normals_faces_are_flat() {
+        let fold = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+            property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+            0 0 0\n1 0 0\n1 1 0\n0 0 1\n3 0 1 2\n3 1 0 3\n";
+        let m = parse(fold.as_bytes()).unwrap();
+        let n = m.normals.as_ref().unwrap();
+        for (t, want) in [(0, Vec3::Z), (1, Vec3::Y)] {
+            for &v in &m.triangles[t] {
+                assert_eq!(n[v as usize], want, "triangle {t}");
+            }
+        }
+        assert_eq!(
+            m.positions.len(),
+            6,
+            "the fold's two shared corners are split"
+        );
     }
 
     #[test]

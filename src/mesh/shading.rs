@@ -60,6 +60,12 @@ impl Mesh {
         })
     }
 
+    /// Smooth shading from the geometry: every face at a point shares the point's
+    /// area-weighted normal (whatever normals the mesh had).
+    pub fn smooth_shaded(&self) -> Mesh {
+        self.group_shaded(&vec![1; self.triangles.len()])
+    }
+
     /// Smooth across edges flatter than `degrees`: a corner's normal is the area-weighted sum
     /// of the faces at its point whose normals are within `degrees` of its own face's (180:
     /// every face at the point; 0: flat). Refused (with the count) when the faces at the
@@ -77,7 +83,7 @@ impl Mesh {
         let pairs: u64 = around.values().map(|f| (f.len() as u64).pow(2)).sum();
         if pairs > MAX_CREASE_PAIRS {
             return Err(format!(
-                "crease: the faces meeting at the mesh's points need {pairs} comparisons, over the cap of {MAX_CREASE_PAIRS} (use smooth = true or false)"
+                "the faces meeting at the mesh's points need {pairs} comparisons, over the cap of {MAX_CREASE_PAIRS} (use smooth = true or false)"
             ));
         }
         // Compared as cosines, with a margin of 1e-6: an edge at exactly the angle is a

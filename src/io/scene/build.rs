@@ -312,12 +312,14 @@ impl Builder<'_> {
     fn object(&mut self, i: usize, d: &MeshDesc) -> Result<Object> {
         let named = self.named_material(i, d)?;
         let (model, name, missing_rgb) = self.mesh_of(d, i)?;
+        let file_normals = model.file_normals;
         let (material, face_materials) = match named {
             Some(m) => (m, None),
             None => self.file_materials(&model, &name, i)?,
         };
         let mut mesh = model.mesh;
         self.fill_missing_rgb(&mut mesh, material, &missing_rgb);
+        let mesh = self.shade(i, d, mesh, file_normals)?;
         let mesh = if d.subdivide > 0 {
             mesh.subdivide(d.subdivide)
         } else {
@@ -403,6 +405,29 @@ impl Builder<'_> {
             for &v in missing_rgb {
                 colors[v as usize] = fill;
             }
+        }
+    }
+
+    /// Entry `i`'s `smooth` and `crease` keys applied to its mesh (neither: the mesh keeps
+    /// the normals its format means). Triangles keep their order, so per-face materials
+    /// still apply; only vertices are split or shared.
+    fn shade(&self, i: usize, d: &MeshDesc, mesh: Mesh, file_normals: bool) -> Result<Mesh> {
+        let key = |k: &str| format!("mesh[{i}].{k}");
+        let fail = |k: &str, m: String| Err(Error::scene(self.path, format!("{}: {m}", key(k))));
+        match (d.smooth, d.crease) {
+            (Some(false), Some(_)) => fail(
+                "crease",
+                "a crease angle smooths the flatter edges; give it without smooth = false".into(),
+            ),
+            (_, Some(c)) if !(c.is_finite() && (0.0..=180.0).contains(&c)) => fail(
+                "crease",
+                format!("must be an angle in 0..=180 degrees, found {c}"),
+            ),
+            (_, Some(c)) => mesh.crease_shaded(c).or_else(|m| fail("crease", m)),
+            (Some(false), None) => Ok(mesh.flat_shaded()),
+            (Some(true), None) if file_normals => Ok(mesh),
+            (Some(true), None) => Ok(mesh.smooth_shaded()),
+            (None, None) => Ok(mesh),
         }
     }
 

@@ -482,6 +482,15 @@ pub struct MeshDesc {
         deserialize_with = "exact3::opt"
     )]
     pub size: Option<[f32; 3]>,
+    /// Shading normals: `true` = the file's own vertex normals, or else normals averaged over
+    /// the faces meeting at each point; `false` = flat (each triangle's geometric normal).
+    /// Omitted: as the mesh's format means them (see the README).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smooth: Option<bool>,
+    /// Smooth across edges whose dihedral angle is below this many degrees (0 to 180), flat
+    /// across sharper ones, from the geometry alone (the file's normals are not used).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crease: Option<f32>,
     /// Midpoint subdivision levels applied after loading (each x4 triangles).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub subdivide: u32,

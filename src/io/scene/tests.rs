@@ -179,3 +179,81 @@ fn errors_name_key_or_line() {
         );
     }
 }
+
+/// Every corner's normal is its triangle's geometric normal.
+fn is_flat(m: &crate::mesh::Mesh) -> bool {
+    let n = m.normals.as_ref().unwrap();
+    (0..m.triangles.len()).all(|t| {
+        let g = m.face_cross(t).normalize();
+        m.triangles[t]
+            .iter()
+            .all(|&v| n[v as usize].distance(g) < 1e-6)
+    })
+}
+
+/// A scene of one mesh entry with `keys` added to it.
+fn one_mesh(entry: &str) -> Result<Scene> {
+    build(&format!(
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[material]]\nname = \"m\"\n\
+         [[mesh]]\nmaterial = \"m\"\n{entry}\n"
+    ))
+}
+
+/// `smooth` and `crease` override the normals a format means: the cube OBJ (flat without
+/// them) becomes a pillow with `smooth = true` and stays flat at `crease = 60`; the kitten
+/// (the file's normals) becomes flat with `smooth = false` and keeps its normals with
+/// `smooth = true`; a generated cube is rounded by `smooth = true`.
+#[test]
+fn smooth_and_crease_keys_override_the_format() {
+    let mesh = |entry: &str| one_mesh(entry).unwrap().objects.remove(0).mesh;
+    let cube = "file = \"meshes/cube.obj\"";
+    assert!(is_flat(&mesh(cube)));
+    assert!(!is_flat(&mesh(&format!("{cube}\nsmooth = true"))));
+    // One normal per point (the flat file's split vertices stay split, with equal normals).
+    let smooth = mesh(&format!("{cube}\nsmooth = true"));
+    let n = smooth.normals.as_ref().unwrap();
+    for (a, b) in smooth.positions.iter().zip(n) {
+        for (c, d) in smooth.positions.iter().zip(n) {
+            assert!(a != c || b == d, "{a}: {b} and {d}");
+        }
+    }
+    assert!(is_flat(&mesh(&format!("{cube}\ncrease = 60"))));
+    assert!(!is_flat(&mesh(&format!("{cube}\ncrease = 120"))));
+    assert!(is_flat(&mesh(&format!(
+        "{cube}\nsmooth = true\ncrease = 89"
+    ))));
+
+    let kitten = "file = \"meshes/kitten.m\"";
+    let own = mesh(kitten);
+    assert!(!is_flat(&own));
+    assert_eq!(mesh(&format!("{kitten}\nsmooth = true")), own);
+    let flat = mesh(&format!("{kitten}\nsmooth = false"));
+    assert!(is_flat(&flat));
+    assert_eq!(flat.triangles.len(), own.triangles.len());
+
+    assert!(is_flat(&mesh("shape = \"cube\"")));
+    assert!(!is_flat(&mesh("shape = \"cube\"\nsmooth = true")));
+    // Subdivision comes after the override and keeps a flat mesh flat.
+    assert!(is_flat(&mesh(&format!("{cube}\nsubdivide = 1"))));
+}
+
+#[test]
+fn bad_crease_keys_name_the_key_and_line() {
+    let cube = "file = \"meshes/cube.obj\"";
+    for (keys, want) in [
+        (
+            "crease = 200",
+            "s.toml:9: mesh[0].crease: must be an angle in 0..=180 degrees, found 200",
+        ),
+        ("crease = nan", "mesh[0].crease: must be an angle"),
+        (
+            "smooth = false\ncrease = 30",
+            "mesh[0].crease: a crease angle smooths the flatter edges",
+        ),
+    ] {
+        let e = one_mesh(&format!("{cube}\n{keys}"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{keys}: {e}");
+    }
+}
