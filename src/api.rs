@@ -34,8 +34,8 @@ impl Scene {
     }
 
     /// A TOML scene file, validated, with every file it names loaded (relative names resolve
-    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`, `.stl`),
-    /// framed at 1024x768 as `whitted render model.obj` frames it (see
+    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`, `.stl`,
+    /// `.gltf`, `.glb`), framed at 1024x768 as `whitted render model.obj` frames it (see
     /// [`scene_for_mesh`](crate::io::mesh_scene::scene_for_mesh)). Loader warnings are
     /// dropped; [`SceneFile::load`] and [`build_scene`] return them.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene> {

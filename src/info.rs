@@ -52,8 +52,8 @@ impl Info {
     }
 }
 
-/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` / `.stl` a mesh, `.toml` a scene, anything
-/// else an image. Errors are the loaders' one-line errors.
+/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` / `.stl` / `.gltf` / `.glb` a
+/// mesh, `.toml` a scene, anything else an image. Errors are the loaders' one-line errors.
 pub fn info(path: &Path) -> Result<Info> {
     if path.is_dir() {
         let (cube, img) = load_cubemap_info(path)?;

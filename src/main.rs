@@ -29,7 +29,7 @@ enum Command {
     /// the scene `render` gives a mesh file.
     Scene {
         /// phong, vertex_color, texture, cubemap, refraction, demo, a .toml scene file, or a
-        /// .m, .obj, .ply or .stl mesh.
+        /// .m, .obj, .ply, .stl, .gltf or .glb mesh.
         name: String,
         /// Override a scene value by its TOML path before printing (as for `render`).
         #[arg(short = 'D', value_name = "KEY=VALUE")]
@@ -38,8 +38,8 @@ enum Command {
     /// Describe a built-in scene, a scene file, a mesh, an image or a cube-map folder after
     /// validating it.
     Info {
-        /// A built-in scene name, a .toml scene, a .m, .obj, .ply or .stl mesh, an image, or a
-        /// cube-map folder.
+        /// A built-in scene name, a .toml scene, a .m, .obj, .ply, .stl, .gltf or .glb mesh, an
+        /// image, or a cube-map folder.
         file: String,
         /// Print one JSON object instead of `key: value` lines.
         #[arg(long)]
@@ -55,8 +55,8 @@ enum Command {
     Merge(MergeArgs),
     /// Intersection throughput on the Embree peer's workloads, beside rt-bench when found.
     #[command(mut_arg("meshes", |a| a.help(
-        "Meshes (.m, .obj, .ply or .stl); default meshes/kitten.m from the current folder, the \
-         WHITTED_ASSETS folders or the copy whitted ships"
+        "Meshes (.m, .obj, .ply, .stl, .gltf or .glb); default meshes/kitten.m from the current \
+         folder, the WHITTED_ASSETS folders or the copy whitted ships"
     )))]
     Bench(whitted::bench::Options),
 }
@@ -99,7 +99,7 @@ fn cmd_merge(args: MergeArgs) -> Result<()> {
 
 #[derive(clap::Args)]
 struct TraceArgs {
-    /// The mesh: .m, .obj, .ply or .stl.
+    /// The mesh: .m, .obj, .ply, .stl, .gltf or .glb.
     mesh: PathBuf,
     /// Input rays: little-endian f32 `ox oy oz dx dy dz tnear tfar`, 32 bytes each.
     #[arg(long)]
@@ -127,8 +127,8 @@ struct TraceArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Built-in scene name, a `.toml` scene file, or a mesh (`.obj`, `.ply`, `.stl`, `.m`) to
-    /// render alone (framed from the canonical direction, canonical lights or its emitters).
+    /// Built-in scene name, a `.toml` scene file, or a mesh (`.obj`, `.ply`, `.stl`, `.gltf`,
+    /// `.glb`, `.m`) to render alone (framed from the canonical direction, canonical lights or its emitters).
     scene: Option<String>,
     /// Render one stage of the assignment: intersection, diffuse, specular, shadow, reflection.
     #[arg(long)]

@@ -310,7 +310,7 @@ fn wrong_file_types_say_what_is_expected() {
         (
             vec!["info".to_string(), unknown.display().to_string()],
             vec![
-                "x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl), scenes (.toml)",
+                "x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl, .gltf, .glb), scenes (.toml)",
             ],
         ),
     ];
@@ -544,12 +544,15 @@ fn unknown_extensions_are_named_with_the_known_ones() {
         &[
             "a.3ds: unknown file type '.3ds'",
             ".toml",
-            ".m, .obj, .ply, .stl",
+            ".m, .obj, .ply, .stl, .gltf, .glb",
         ],
     );
     fails_with(
         &["scene", s],
-        &["unknown file type '.3ds'", ".m, .obj, .ply, .stl"],
+        &[
+            "unknown file type '.3ds'",
+            ".m, .obj, .ply, .stl, .gltf, .glb",
+        ],
     );
     fails_with(
         &[
@@ -560,7 +563,10 @@ fn unknown_extensions_are_named_with_the_known_ones() {
             "--hits",
             "/dev/null",
         ],
-        &["unknown mesh format '.3ds'", ".m, .obj, .ply, .stl"],
+        &[
+            "unknown mesh format '.3ds'",
+            ".m, .obj, .ply, .stl, .gltf, .glb",
+        ],
     );
 }
 
@@ -703,7 +709,10 @@ fn every_flag_has_help() {
     assert!(render.contains("Image width in pixels"), "{render}");
     for sub in ["trace-rays", "bench"] {
         let help = succeeds(&[sub, "--help"]);
-        assert!(help.contains(".m, .obj, .ply or .stl"), "{sub}: {help}");
+        assert!(
+            help.contains(".m, .obj, .ply, .stl, .gltf or .glb"),
+            "{sub}: {help}"
+        );
     }
 }
 

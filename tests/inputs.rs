@@ -111,6 +111,16 @@ fn fuzz_corpus_stl() {
 }
 
 #[test]
+fn fuzz_corpus_gltf() {
+    let mut n = 0;
+    for (p, data) in corpus("gltf") {
+        n += 1;
+        fuzz::gltf(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(n >= 2);
+}
+
+#[test]
 fn fuzz_corpus_obj_mtl() {
     for (p, data) in corpus("obj_mtl") {
         fuzz::obj_mtl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
@@ -722,7 +732,7 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
             COLOR_OD,
             "file = \"meshes/shape.3ds\"",
             format!(
-                "{s}:22: mesh[1].file: {d}/meshes/shape.3ds: unknown mesh format '.3ds'; mesh files are .m, .obj, .ply, .stl"
+                "{s}:22: mesh[1].file: {d}/meshes/shape.3ds: unknown mesh format '.3ds'; mesh files are .m, .obj, .ply, .stl, .gltf, .glb"
             ),
         ),
         (
@@ -878,7 +888,7 @@ fn info_on_an_unknown_file_type_lists_the_types() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
+        e.contains("x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl, .gltf, .glb), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);

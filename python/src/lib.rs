@@ -200,8 +200,8 @@ impl Raycaster {
         Ok(self.add(&positions, &tris))
     }
 
-    /// Add the mesh in a file whitted reads (`.m`, `.obj`, `.ply`, `.stl`); returns its id and the
-    /// loader's warnings.
+    /// Add the mesh in a file whitted reads (`.m`, `.obj`, `.ply`, `.stl`, `.gltf`, `.glb`);
+    /// returns its id and the loader's warnings.
     fn add_mesh(&mut self, py: Python<'_>, path: PathBuf) -> PyResult<(u32, Vec<String>)> {
         let (mesh, warnings) = py
             .detach(|| whitted::io::load_mesh(&path))

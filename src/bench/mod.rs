@@ -42,9 +42,9 @@ use std::path::{Path, PathBuf};
 #[cfg_attr(feature = "cli", derive(clap::Args))]
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    /// Meshes (`.m`, `.obj`, `.ply` or `.stl`); default `meshes/kitten.m` from the current
-    /// folder, the `WHITTED_ASSETS` folders or the copy whitted ships (the search path of scene
-    /// files).
+    /// Meshes (`.m`, `.obj`, `.ply`, `.stl`, `.gltf` or `.glb`); default `meshes/kitten.m` from
+    /// the current folder, the `WHITTED_ASSETS` folders or the copy whitted ships (the search
+    /// path of scene files).
     pub meshes: Vec<PathBuf>,
     /// Tracing threads (also the peer's `--threads`); 1 traces on the calling thread.
     #[cfg_attr(feature = "cli", arg(long, short = 't', default_value_t = 1))]

@@ -37,6 +37,28 @@ pub fn stl(data: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// The glTF reader (JSON or GLB) on arbitrary bytes; buffers and images named by file are
+/// never read (each such name is an error).
+pub fn gltf(data: &[u8]) -> Result<()> {
+    let path = Path::new("fuzz.gltf");
+    let (model, _) = crate::io::gltf::parse_with(data, path, &mut |name| {
+        Err(Error::parse(
+            Path::new(name),
+            0,
+            "files are not read while fuzzing",
+        ))
+    })?;
+    check_mesh(&model.mesh);
+    if let Some(f) = &model.face_materials {
+        assert_eq!(f.len(), model.mesh.triangles.len());
+        assert!(
+            f.iter()
+                .all(|&m| m == NO_MATERIAL || (m as usize) < model.materials.len())
+        );
+    }
+    Ok(())
+}
+
 /// The OBJ reader with materials: the OBJ is the bytes before the first `--mtl--` line, the
 /// MTL file every `mtllib` names is the bytes after it (never a file on disk).
 pub fn obj_mtl(data: &[u8]) -> Result<()> {

@@ -1,7 +1,9 @@
-//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`, `.stl`), scenes (TOML), images.
+//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`, `.stl`, `.gltf`, `.glb`), scenes
+//! (TOML), images.
 
 pub mod aov;
 pub mod fuzz;
+pub mod gltf;
 pub mod image;
 pub mod merge;
 pub mod mesh_scene;
@@ -24,7 +26,7 @@ use std::path::{Path, PathBuf};
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
 
 /// Mesh file extensions the loaders read, in lower case (a mesh's format is its extension).
-pub const MESH_EXTENSIONS: [&str; 4] = ["m", "obj", "ply", "stl"];
+pub const MESH_EXTENSIONS: [&str; 6] = ["m", "obj", "ply", "stl", "gltf", "glb"];
 
 /// Check that `path` is a regular file under [`MAX_FILE_BYTES`], without reading it: folders,
 /// devices and FIFOs (`/dev/zero` would never end) are refused.
@@ -58,15 +60,21 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
-/// Load a mesh with the materials its file brings (OBJ: `mtllib`), by extension.
+/// Load a mesh with the materials its file brings (OBJ: `mtllib`; glTF: `materials`), by
+/// extension.
 pub fn load_model(path: &Path) -> Result<(Model, Vec<String>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path),
+        "gltf" | "glb" => {
+            check_regular(path)?;
+            gltf::load_gltf_model(path)
+        }
         _ => load_mesh(path).map(|(mesh, w)| (Model::plain(mesh), w)),
     }
 }
 
-/// Load a mesh by extension (`.m`, `.obj`, `.ply` or `.stl`); warnings are returned beside it.
+/// Load a mesh by extension (`.m`, `.obj`, `.ply`, `.stl`, `.gltf` or `.glb`); warnings are
+/// returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
     load_mesh_detail(path).map(|(m, w, _)| (m, w))
 }
@@ -80,6 +88,7 @@ pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
         "obj" => obj::parse_obj_detail,
         "ply" => ply::parse_ply_detail,
         "stl" => stl::parse_stl_detail,
+        "gltf" | "glb" => gltf::parse_gltf_detail,
         _ => return Err(unknown_mesh_type(path)),
     };
     parse(&read_regular(path)?, path)
@@ -100,6 +109,7 @@ pub fn load_scene_mesh(path: &Path) -> Result<(Mesh, Vec<String>, Vec<u32>)> {
 pub fn load_scene_model(path: &Path) -> Result<(Model, Vec<String>, Vec<u32>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path).map(|(m, w)| (m, w, Vec::new())),
+        "gltf" | "glb" => load_model(path).map(|(m, w)| (m, w, Vec::new())),
         "m" => {
             let r = mfile::read_m(&read_regular(path)?, path)?;
             let model = Model {
