@@ -73,6 +73,14 @@ pub fn info(path: &Path) -> Result<Info> {
                 info.fields.push(("materials", json!(model.material_info)));
                 info.warnings = warnings;
             }
+            if ext == "gltf" || ext == "glb" {
+                // The file's materials as whitted reads them (scene material descriptions).
+                let (model, _) = crate::io::load_model(path)?;
+                // Through text, so that f32s print as written (0.8, not 0.800000011920929).
+                let text = serde_json::to_string(&model.materials).expect("materials serialise");
+                let materials: Value = serde_json::from_str(&text).expect("just written");
+                info.fields.push(("materials", materials));
+            }
             Ok(info)
         }
         "toml" => scene_info(path),

@@ -66,6 +66,7 @@ fn gltf_materials_come_into_the_scene() {
         out.contains("triangles: 12\n") && out.contains("open_edges: 0\n"),
         "{out}"
     );
+    assert!(out.contains("materials:") && out.contains("red"), "{out}");
 }
 
 #[test]

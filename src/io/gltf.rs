@@ -141,6 +141,7 @@ struct Buffer {
 struct MaterialJson {
     name: Option<String>,
     pbr_metallic_roughness: Option<Pbr>,
+    emissive_factor: Option<[f32; 3]>,
 }
 
 /// `materials[i].pbrMetallicRoughness`.

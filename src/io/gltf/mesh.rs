@@ -465,7 +465,8 @@ fn primitive(
 
 /// `materials` in whitted's terms: the default material's coefficients with `Od` from
 /// `baseColorFactor` (linear RGB, alpha dropped) or a `baseColorTexture` in an image file
-/// (the factor is then not applied: a material has one colour source).
+/// (the factor is then not applied: a material has one colour source), and `ke` from
+/// `emissiveFactor`.
 fn materials(
     doc: &Document,
     path: &Path,
@@ -528,6 +529,18 @@ fn materials(
                     desc.name
                 )),
             }
+        }
+        // Emission, as MTL's Ke: shown on the surface, and lighting the scene through point
+        // lights of its own (see `scene::emitter_lights`).
+        if let Some(e) = m.emissive_factor {
+            if !e.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                return Err(at(
+                    path,
+                    &format!("{key}.emissiveFactor"),
+                    "components must be finite and >= 0",
+                ));
+            }
+            desc.ke = Coef::Rgb(e);
         }
         desc.kr = Some(Coef::Scalar(0.0));
         out.push(desc);

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::io::model::NO_MATERIAL;
+use crate::io::scene::schema::Coef;
 use glam::{Vec2, Vec3};
 use serde_json::{Value, json};
 
@@ -181,7 +182,7 @@ fn materials_map_base_colour() {
     let mut second = prim.clone();
     second["material"] = json!(0);
     d["meshes"][0]["primitives"] = json!([prim, second]);
-    d["materials"] = json!([{"name": "red", "pbrMetallicRoughness": {
+    d["materials"] = json!([{"name": "red", "emissiveFactor": [0.5, 0.25, 0], "pbrMetallicRoughness": {
         "baseColorFactor": [1, 0, 0, 1], "baseColorTexture": {"index": 0}}}]);
     d["textures"] = json!([{"source": 0}]);
     d["images"] = json!([{"bufferView": 0, "mimeType": "image/png"}]);
@@ -190,6 +191,7 @@ fn materials_map_base_colour() {
     assert_eq!(m.materials[0].name, "red");
     assert_eq!(m.materials[0].color, Some([1.0, 0.0, 0.0]));
     assert_eq!(m.materials[0].texture, None);
+    assert_eq!(m.materials[0].ke, Coef::Rgb([0.5, 0.25, 0.0]));
     assert_eq!(m.face_materials.unwrap(), [NO_MATERIAL, NO_MATERIAL, 0, 0]);
     assert!(w.iter().any(|w| w.contains("baseColorTexture")), "{w:?}");
 }
@@ -263,6 +265,10 @@ fn errors_name_the_json_path() {
         (
             with(&|d| d["meshes"][0]["primitives"][0]["material"] = json!(3)),
             "glTF meshes[0].primitives[0].material: no material 3",
+        ),
+        (
+            with(&|d| d["materials"] = json!([{"emissiveFactor": [0, -1, 0]}])),
+            "glTF materials[0].emissiveFactor: components must be finite and >= 0",
         ),
         (
             with(&|d| d["accessors"][1]["sparse"] = json!({})),
