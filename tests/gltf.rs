@@ -88,3 +88,26 @@ fn broken_gltf_is_one_error_line_with_the_json_path() {
         "{err}"
     );
 }
+
+/// A glTF camera is the view of the model rendered alone (`whitted scene` prints it).
+#[test]
+fn a_gltf_camera_is_the_view() {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.gltf"))
+            .unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["cameras"] =
+        serde_json::json!([{"type": "perspective", "perspective": {"yfov": 0.6, "znear": 0.1}}]);
+    doc["nodes"][0]["children"] = serde_json::json!([1]);
+    doc["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"camera": 0, "translation": [0, 0, 6]}));
+    let file = tmp("camera.gltf");
+    std::fs::write(&file, serde_json::to_string(&doc).unwrap()).unwrap();
+    let (code, toml, err) = whitted(&["scene", file.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(toml.contains("eye = [0.0, 0.0, 6.0]"), "{toml}");
+    assert!(toml.contains("look_at = [0.0, 0.0, 5.0]"), "{toml}");
+    render(file.to_str().unwrap(), &tmp("camera.png"));
+}

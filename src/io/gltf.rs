@@ -6,9 +6,9 @@
 //! applied to its meshes; triangle primitives (mode 4), indexed (u8, u16, u32) or not;
 //! `POSITION`, `NORMAL`, `TEXCOORD_0` and `COLOR_0` (floats, or normalised u8/u16 for uv and
 //! colour); buffers in the GLB `BIN` chunk, in `data:` URIs (base64) or in files beside the
-//! model; materials' `baseColorFactor` and a `baseColorTexture` in an image file. Cameras,
-//! lights, skins, morph targets and animations are not read (the model is framed as any mesh
-//! is); other primitive modes, sparse accessors and any `extensionsRequired` are refused by
+//! model; materials' `baseColorFactor`, a `baseColorTexture` in an image file and
+//! `emissiveFactor`; the first perspective camera met in the node trees. Lights, skins, morph
+//! targets and animations are not read; other primitive modes, sparse accessors and any `extensionsRequired` are refused by
 //! name. Every count and offset is checked against the bytes its buffer holds before
 //! anything is allocated; errors name the file and the JSON path (`accessors[3].count: ...`).
 //! The table of what maps to what is in docs/formats.md ("glTF").
@@ -49,6 +49,8 @@ struct Document {
     #[serde(default)]
     images: Vec<ImageJson>,
     #[serde(default)]
+    cameras: Vec<CameraJson>,
+    #[serde(default)]
     extensions_used: Vec<String>,
     #[serde(default)]
     extensions_required: Vec<String>,
@@ -73,10 +75,25 @@ struct Node {
     #[serde(default)]
     children: Vec<usize>,
     mesh: Option<usize>,
+    camera: Option<usize>,
     matrix: Option<[f32; 16]>,
     translation: Option<[f32; 3]>,
     rotation: Option<[f32; 4]>,
     scale: Option<[f32; 3]>,
+}
+
+/// `cameras[i]`: only perspective cameras are used.
+#[derive(Debug, Deserialize)]
+struct CameraJson {
+    #[serde(rename = "type")]
+    kind: String,
+    perspective: Option<Perspective>,
+}
+
+/// `cameras[i].perspective`: its vertical field of view (the aspect ratio is the image's).
+#[derive(Debug, Deserialize)]
+struct Perspective {
+    yfov: f32,
 }
 
 /// `meshes[i]`.

@@ -5,7 +5,7 @@
 //! [`MaterialDesc`], so loaders need nothing of the builder.
 
 use crate::io::mtl::MtlInfo;
-use crate::io::scene::schema::MaterialDesc;
+use crate::io::scene::schema::{CameraDesc, MaterialDesc};
 use crate::mesh::Mesh;
 
 /// A mesh with the materials its file brings.
@@ -23,6 +23,9 @@ pub struct Model {
     /// otherwise the loader made them as the format means (flat, smoothing groups, or
     /// averaged for `.m`).
     pub file_normals: bool,
+    /// The file's own view (glTF: its first perspective camera), used when the model is
+    /// rendered alone instead of framing it.
+    pub camera: Option<CameraDesc>,
 }
 
 impl Model {

@@ -134,6 +134,7 @@ pub fn parse_obj_model(
             material_info,
             face_materials,
             file_normals,
+            camera: None,
         },
         warnings,
     ))

@@ -6,7 +6,9 @@ use super::accessor::{View, view};
 use super::{Document, Node, Primitive, at};
 use crate::error::Result;
 use crate::io::model::{Model, NO_MATERIAL};
-use crate::io::scene::schema::{Coef, MAX_SCENE_TRIANGLES, MaterialDesc, default_material};
+use crate::io::scene::schema::{
+    CameraDesc, Coef, MAX_SCENE_TRIANGLES, MaterialDesc, default_material,
+};
 use crate::mesh::Mesh;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
 use std::borrow::Cow;
@@ -22,7 +24,8 @@ pub(super) fn build(
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<Model> {
-    let instances = instances(doc, path)?;
+    let (instances, camera) = instances(doc, path)?;
+    let camera = camera.and_then(|(world, c)| view_of(doc, world, c, path, warnings));
     // The caps first: every instance of a mesh repeats its triangles.
     let (mut planned, mut planned_vertices) = (0u64, 0u64);
     for &(_, m) in &instances {
@@ -146,12 +149,18 @@ pub(super) fn build(
         material_info: Vec::new(),
         face_materials: any_material.then_some(face_materials),
         file_normals: all_normals,
+        camera,
     })
 }
 
-/// Every (world transform, mesh) of the default scene's node trees, in depth-first order.
-/// A node met twice (a cycle, or a node with two parents) is an error.
-fn instances(doc: &Document, path: &Path) -> Result<Vec<(Mat4, usize)>> {
+/// The instances of a scene: every (world transform, mesh), and the first (world transform,
+/// camera) met.
+type Instances = (Vec<(Mat4, usize)>, Option<(Mat4, usize)>);
+
+/// Every (world transform, mesh) of the default scene's node trees, in depth-first order,
+/// and the first node with a camera. A node met twice (a cycle, or a node with two parents)
+/// is an error.
+fn instances(doc: &Document, path: &Path) -> Result<Instances> {
     let roots: Vec<usize> = match doc.scene.or((!doc.scenes.is_empty()).then_some(0)) {
         Some(s) => doc
             .scenes
@@ -173,6 +182,7 @@ fn instances(doc: &Document, path: &Path) -> Result<Vec<(Mat4, usize)>> {
     };
     let mut seen = vec![false; doc.nodes.len()];
     let mut out = Vec::new();
+    let mut camera = None;
     // An explicit stack: a chain of a million nodes must not overflow the thread's stack.
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
     while let Some((i, parent)) = stack.pop() {
@@ -201,11 +211,64 @@ fn instances(doc: &Document, path: &Path) -> Result<Vec<(Mat4, usize)>> {
             }
             out.push((world, m));
         }
+        if let Some(c) = node.camera {
+            if c >= doc.cameras.len() {
+                return Err(at(
+                    path,
+                    &format!("nodes[{i}].camera"),
+                    format!("no camera {c}"),
+                ));
+            }
+            camera = camera.or(Some((world, c)));
+        }
         for &c in node.children.iter().rev() {
             stack.push((c, world));
         }
     }
-    Ok(out)
+    Ok((out, camera))
+}
+
+/// Camera `c` at `world` as a scene camera: glTF cameras look down their -z with +y up. One
+/// that is not perspective, or that its transform makes degenerate, is skipped with a
+/// warning (the model is then framed as any mesh is).
+fn view_of(
+    doc: &Document,
+    world: Mat4,
+    c: usize,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Option<CameraDesc> {
+    let cam = &doc.cameras[c];
+    let mut skip = |why: &str| {
+        warnings.push(format!(
+            "{}: glTF cameras[{c}]: {why}; the model is framed instead",
+            path.display()
+        ));
+        None
+    };
+    let Some(p) = cam
+        .perspective
+        .as_ref()
+        .filter(|_| cam.kind == "perspective")
+    else {
+        return skip(&format!("a '{}' camera is not read", cam.kind));
+    };
+    let vfov = p.yfov.to_degrees();
+    if !(vfov > 0.0 && vfov < 180.0) {
+        return skip(&format!("yfov {} is not in (0, pi)", p.yfov));
+    }
+    let eye = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    if !eye.is_finite() || forward == Vec3::ZERO || forward.cross(up).length() < 1e-3 {
+        return skip("its node's transform leaves no view direction and up");
+    }
+    Some(CameraDesc {
+        eye: eye.to_array(),
+        look_at: (eye + forward).to_array(),
+        up: up.to_array(),
+        vfov,
+    })
 }
 
 /// A node's own transform: `matrix` (column-major), or scale, then rotation, then

@@ -315,6 +315,43 @@ fn errors_name_the_json_path() {
     assert!(err(&cut).contains("runs past the end of the file"));
 }
 
+/// The first perspective camera in the node trees is the model's view, by its node's
+/// transform; an orthographic one is skipped with a warning; a missing one is an error.
+#[test]
+fn the_first_perspective_camera_is_the_view() {
+    let (mut d, bin) = doc(&TRI, None);
+    d["cameras"] = json!([
+        {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}},
+    ]);
+    d["scenes"][0]["nodes"] = json!([0, 1]);
+    d["nodes"] = json!([
+        {"mesh": 0},
+        {"translation": [0, 0, 10], "children": [2, 3]},
+        {"camera": 1, "rotation": [0, 1, 0, 0]},
+        {"camera": 0},
+    ]);
+    let (m, w) = parse(&glb(&d, &bin)).unwrap();
+    let c = m.camera.expect("a camera");
+    assert_eq!(c.eye, [0.0, 0.0, 10.0]);
+    // Turned half way round about y: it looks down +z.
+    assert!(Vec3::from(c.look_at).distance(Vec3::new(0.0, 0.0, 11.0)) < 1e-5);
+    assert!(Vec3::from(c.up).distance(Vec3::Y) < 1e-5);
+    assert!((c.vfov - 0.5f32.to_degrees()).abs() < 1e-4);
+    assert!(w.is_empty(), "{w:?}");
+    // Only the orthographic one: skipped, with a warning.
+    d["nodes"][1]["children"] = json!([3]);
+    let (m, w) = parse(&glb(&d, &bin)).unwrap();
+    assert!(m.camera.is_none());
+    assert!(
+        w.iter()
+            .any(|w| w.contains("glTF cameras[0]: a 'orthographic' camera is not read")),
+        "{w:?}"
+    );
+    d["nodes"][3]["camera"] = json!(7);
+    assert!(err(&glb(&d, &bin)).contains("glTF nodes[3].camera: no camera 7"));
+}
+
 #[test]
 fn base64_decodes_with_and_without_padding() {
     assert_eq!(base64("TWFu").unwrap(), b"Man");
