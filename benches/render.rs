@@ -5,7 +5,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::path::PathBuf;
 use std::time::Duration;
-use whitted::io::scene_file::{SearchPath, build_scene};
+use whitted::io::scene::{SearchPath, build_scene};
 use whitted::render::{Settings, World, render};
 use whitted::scenes;
 

@@ -8,7 +8,7 @@
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::io::image::save_image;
-use crate::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
+use crate::io::scene::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
 use crate::render::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, World};
 use crate::scene::Scene;
 use crate::scenes;
@@ -20,7 +20,7 @@ pub const MAX_SPP: u32 = 4096;
 impl Scene {
     /// A built-in scene by name (one of [`scenes::NAMES`]: the five canonical scenes and
     /// `demo`), loaded from the data shipped with whitted (see
-    /// [`PROJECT_DATA`](crate::io::scene_file::PROJECT_DATA)), at its default size. Loader
+    /// [`PROJECT_DATA`](crate::io::scene::PROJECT_DATA)), at its default size. Loader
     /// warnings are dropped; [`scenes::builtin`] and [`build_scene`] return them.
     pub fn builtin(name: &str) -> Result<Scene> {
         let file = scenes::builtin(name).ok_or_else(|| {
@@ -34,8 +34,8 @@ impl Scene {
     }
 
     /// A TOML scene file, validated, with every file it names loaded (relative names resolve
-    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`),
-    /// framed at 1024x768 as `whitted render model.obj` frames it (see
+    /// as [`SearchPath::for_scene`] says), or a mesh file alone (`.m`, `.obj`, `.ply`, `.stl`,
+    /// `.gltf`, `.glb`), framed at 1024x768 as `whitted render model.obj` frames it (see
     /// [`scene_for_mesh`](crate::io::mesh_scene::scene_for_mesh)). Loader warnings are
     /// dropped; [`SceneFile::load`] and [`build_scene`] return them.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene> {

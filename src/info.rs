@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{IMAGE_EXTENSIONS, ImageInfo, decode_texture, load_cubemap_info};
-use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
+use crate::io::scene::{SceneFile, SearchPath, build_scene};
 use crate::io::{MESH_EXTENSIONS, list_extensions, load_mesh_detail};
 use crate::mesh::Mesh;
 use crate::scene::Background;
@@ -52,8 +52,8 @@ impl Info {
     }
 }
 
-/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` a mesh, `.toml` a scene, anything
-/// else an image. Errors are the loaders' one-line errors.
+/// Inspect `path`: a folder is a cube map, `.m` / `.obj` / `.ply` / `.stl` / `.gltf` / `.glb` a
+/// mesh, `.toml` a scene, anything else an image. Errors are the loaders' one-line errors.
 pub fn info(path: &Path) -> Result<Info> {
     if path.is_dir() {
         let (cube, img) = load_cubemap_info(path)?;
@@ -72,6 +72,14 @@ pub fn info(path: &Path) -> Result<Info> {
                 let (model, warnings) = crate::io::obj::load_obj_model(path)?;
                 info.fields.push(("materials", json!(model.material_info)));
                 info.warnings = warnings;
+            }
+            if ext == "gltf" || ext == "glb" {
+                // The file's materials as whitted reads them (scene material descriptions).
+                let (model, _) = crate::io::load_model(path)?;
+                // Through text, so that f32s print as written (0.8, not 0.800000011920929).
+                let text = serde_json::to_string(&model.materials).expect("materials serialise");
+                let materials: Value = serde_json::from_str(&text).expect("just written");
+                info.fields.push(("materials", materials));
             }
             Ok(info)
         }
@@ -307,7 +315,7 @@ pub fn run_arg(arg: &str, defines: &[String], as_json: bool) -> Result<String> {
     };
     let file = file.with_overrides(defines)?;
     let info = scene_file_info(&file, Path::new(&name), dir)
-        .map_err(|e| crate::io::scene_file::name_overrides(e, defines))?;
+        .map_err(|e| crate::io::scene::name_overrides(e, defines))?;
     Ok(if as_json {
         info.to_json() + "\n"
     } else {

@@ -11,7 +11,7 @@
 //! # Ok::<(), whitted::Error>(())
 //! ```
 //!
-//! Below the front door: [`io::scene_file`] parses and validates scene files (and returns
+//! Below the front door: [`io::scene`] parses and validates scene files (and returns
 //! the loaders' warnings), [`render::World`] holds a scene with its BVH, [`render::render`]
 //! renders with progress and statistics, [`trace`] traces ray files against a mesh.
 // No unsafe code but one system call (`accel::pages`, huge-page advice), the calls into the

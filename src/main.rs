@@ -5,7 +5,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
-use whitted::io::scene_file::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
+use whitted::io::scene::{MAX_DEPTH, SceneFile, SearchPath, build_scene, check_size};
 use whitted::render::{Settings, Stage, World};
 use whitted::{Error, Result, scenes};
 
@@ -29,7 +29,7 @@ enum Command {
     /// the scene `render` gives a mesh file.
     Scene {
         /// phong, vertex_color, texture, cubemap, refraction, demo, a .toml scene file, or a
-        /// .m, .obj or .ply mesh.
+        /// .m, .obj, .ply, .stl, .gltf or .glb mesh.
         name: String,
         /// Override a scene value by its TOML path before printing (as for `render`).
         #[arg(short = 'D', value_name = "KEY=VALUE")]
@@ -38,8 +38,8 @@ enum Command {
     /// Describe a built-in scene, a scene file, a mesh, an image or a cube-map folder after
     /// validating it.
     Info {
-        /// A built-in scene name, a .toml scene, a .m, .obj or .ply mesh, an image, or a
-        /// cube-map folder.
+        /// A built-in scene name, a .toml scene, a .m, .obj, .ply, .stl, .gltf or .glb mesh, an
+        /// image, or a cube-map folder.
         file: String,
         /// Print one JSON object instead of `key: value` lines.
         #[arg(long)]
@@ -55,8 +55,8 @@ enum Command {
     Merge(MergeArgs),
     /// Intersection throughput on the Embree peer's workloads, beside rt-bench when found.
     #[command(mut_arg("meshes", |a| a.help(
-        "Meshes (.m, .obj or .ply); default meshes/kitten.m from the current folder, the \
-         WHITTED_ASSETS folders or the copy whitted ships"
+        "Meshes (.m, .obj, .ply, .stl, .gltf or .glb); default meshes/kitten.m from the current \
+         folder, the WHITTED_ASSETS folders or the copy whitted ships"
     )))]
     Bench(whitted::bench::Options),
 }
@@ -99,7 +99,7 @@ fn cmd_merge(args: MergeArgs) -> Result<()> {
 
 #[derive(clap::Args)]
 struct TraceArgs {
-    /// The mesh: .m, .obj or .ply.
+    /// The mesh: .m, .obj, .ply, .stl, .gltf or .glb.
     mesh: PathBuf,
     /// Input rays: little-endian f32 `ox oy oz dx dy dz tnear tfar`, 32 bytes each.
     #[arg(long)]
@@ -127,8 +127,8 @@ struct TraceArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Built-in scene name, a `.toml` scene file, or a mesh (`.obj`, `.ply`, `.m`) to render
-    /// alone (framed from the canonical direction, canonical lights or its emitters).
+    /// Built-in scene name, a `.toml` scene file, or a mesh (`.obj`, `.ply`, `.stl`, `.gltf`,
+    /// `.glb`, `.m`) to render alone (framed from the canonical direction, canonical lights or its emitters).
     scene: Option<String>,
     /// Render one stage of the assignment: intersection, diffuse, specular, shadow, reflection.
     #[arg(long)]
@@ -239,7 +239,7 @@ fn parse_exr_options(half: bool, compression: &str) -> Result<whitted::io::outpu
 /// `--subdivide k` on meshes of `triangles` in all: refused before anything is allocated when
 /// it would pass the scene's triangle cap.
 fn check_subdivided_triangles(k: u32, triangles: u64) -> Result<()> {
-    use whitted::io::scene_file::MAX_SCENE_TRIANGLES;
+    use whitted::io::scene::MAX_SCENE_TRIANGLES;
     let made = triangles.saturating_mul(1u64 << (2 * k.min(16)));
     if made > MAX_SCENE_TRIANGLES {
         return Err(Error::Usage(format!(
@@ -269,10 +269,10 @@ fn parse_engine(name: &str) -> Result<whitted::trace::Engine> {
 }
 
 fn check_subdivide(k: u32) -> Result<()> {
-    if k > whitted::io::scene_file::MAX_SUBDIVIDE {
+    if k > whitted::io::scene::MAX_SUBDIVIDE {
         return Err(Error::Usage(format!(
             "--subdivide {k} is over the cap of {}",
-            whitted::io::scene_file::MAX_SUBDIVIDE
+            whitted::io::scene::MAX_SUBDIVIDE
         )));
     }
     Ok(())
@@ -443,7 +443,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
             .map_err(|m| Error::Usage(format!("--width/--height: {m}")))?
     } else {
         file.image_size(&path)
-            .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?
+            .map_err(|e| whitted::io::scene::name_overrides(e, &args.define))?
     };
     let stage = match &args.stage {
         None => None,
@@ -506,9 +506,8 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let exr = parse_exr_options(args.half, &args.exr_compression)?;
     // A value set by -D names the argument too.
     let load_start = std::time::Instant::now();
-    let (mut scene, warnings) =
-        build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
-            .map_err(|e| whitted::io::scene_file::name_overrides(e, &args.define))?;
+    let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
+        .map_err(|e| whitted::io::scene::name_overrides(e, &args.define))?;
     check_subdivided_triangles(args.subdivide, scene.triangle_count() as u64)?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);

@@ -2,6 +2,9 @@
 
 use glam::{Vec2, Vec3};
 
+mod shading;
+pub use shading::MAX_CREASE_PAIRS;
+
 /// Positions, triangles and optional per-vertex attributes. Every attribute vector, when
 /// present, has exactly one entry per position.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -121,7 +121,7 @@ pub struct View {
     pub vfov: f32,
 }
 
-/// A validated scene, everything loaded: what [`build_scene`](crate::io::scene_file::build_scene)
+/// A validated scene, everything loaded: what [`build_scene`](crate::io::scene::build_scene)
 /// makes of a scene file, ready for [`World::new`](crate::render::World::new) (or
 /// [`Scene::render`]).
 #[derive(Clone, Debug, PartialEq)]

@@ -1,6 +1,6 @@
 //! The built-in scenes: the five canonical scenes of SCENES.md §5 and the file-free demo.
 
-use crate::io::scene_file::{
+use crate::io::scene::{
     BackgroundDesc, CameraDesc, CheckerDesc, ImageDesc, LightDesc, MaterialDesc, MeshDesc,
     RenderDesc, SceneFile,
 };

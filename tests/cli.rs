@@ -294,8 +294,8 @@ fn canonical_scenes_render_from_another_folder_without_whitted_assets() {
 /// read lists the types it does.
 #[test]
 fn wrong_file_types_say_what_is_expected() {
-    let stl = tmp("x.stl");
-    std::fs::write(&stl, "solid x\nendsolid x\n").unwrap();
+    let unknown = tmp("x.3ds");
+    std::fs::write(&unknown, "MM").unwrap();
     let png = tmp("x.png");
     image::RgbImage::new(2, 2).save(&png).unwrap();
     let cases = [
@@ -308,9 +308,9 @@ fn wrong_file_types_say_what_is_expected() {
             ],
         ),
         (
-            vec!["info".to_string(), stl.display().to_string()],
+            vec!["info".to_string(), unknown.display().to_string()],
             vec![
-                "x.stl: not a file type whitted reads; it reads meshes (.m, .obj, .ply), scenes (.toml)",
+                "x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl, .gltf, .glb), scenes (.toml)",
             ],
         ),
     ];
@@ -536,16 +536,23 @@ fn info_and_scene_take_builtin_names_files_and_d() {
 /// reads, instead of being parsed as TOML.
 #[test]
 fn unknown_extensions_are_named_with_the_known_ones() {
-    let stl = tmp("a.stl");
-    std::fs::write(&stl, "solid a\nendsolid a\n").unwrap();
-    let s = stl.to_str().unwrap();
+    let unknown = tmp("a.3ds");
+    std::fs::write(&unknown, "MM").unwrap();
+    let s = unknown.to_str().unwrap();
     fails_with(
         &["render", s],
-        &["a.stl: unknown file type '.stl'", ".toml", ".m, .obj, .ply"],
+        &[
+            "a.3ds: unknown file type '.3ds'",
+            ".toml",
+            ".m, .obj, .ply, .stl, .gltf, .glb",
+        ],
     );
     fails_with(
         &["scene", s],
-        &["unknown file type '.stl'", ".m, .obj, .ply"],
+        &[
+            "unknown file type '.3ds'",
+            ".m, .obj, .ply, .stl, .gltf, .glb",
+        ],
     );
     fails_with(
         &[
@@ -556,7 +563,10 @@ fn unknown_extensions_are_named_with_the_known_ones() {
             "--hits",
             "/dev/null",
         ],
-        &["unknown mesh format '.stl'", ".m, .obj, .ply"],
+        &[
+            "unknown mesh format '.3ds'",
+            ".m, .obj, .ply, .stl, .gltf, .glb",
+        ],
     );
 }
 
@@ -699,7 +709,10 @@ fn every_flag_has_help() {
     assert!(render.contains("Image width in pixels"), "{render}");
     for sub in ["trace-rays", "bench"] {
         let help = succeeds(&[sub, "--help"]);
-        assert!(help.contains(".m, .obj or .ply"), "{sub}: {help}");
+        assert!(
+            help.contains(".m, .obj, .ply, .stl, .gltf or .glb"),
+            "{sub}: {help}"
+        );
     }
 }
 

@@ -101,6 +101,26 @@ fn fuzz_corpus_ply() {
 }
 
 #[test]
+fn fuzz_corpus_stl() {
+    let mut n = 0;
+    for (p, data) in corpus("stl") {
+        n += 1;
+        fuzz::stl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(n >= 3);
+}
+
+#[test]
+fn fuzz_corpus_gltf() {
+    let mut n = 0;
+    for (p, data) in corpus("gltf") {
+        n += 1;
+        fuzz::gltf(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(n >= 2);
+}
+
+#[test]
 fn fuzz_corpus_obj_mtl() {
     for (p, data) in corpus("obj_mtl") {
         fuzz::obj_mtl(&data).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
@@ -648,7 +668,7 @@ fn build_ref(
     od: &str,
     mesh: &str,
 ) -> whitted::Result<(whitted::scene::Scene, Vec<String>)> {
-    use whitted::io::scene_file::{SceneFile, SearchPath, build_scene};
+    use whitted::io::scene::{SceneFile, SearchPath, build_scene};
     let text = REF_SCENE
         .replace("{BG}", bg)
         .replace("{OD}", od)
@@ -682,7 +702,7 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
             "meshes/bad.m".into(),
             b"Vertex 1 0 0 0\nVertex 2 NaN 0 0\n".to_vec(),
         ),
-        ("meshes/shape.stl".into(), b"solid x\n".to_vec()),
+        ("meshes/shape.3ds".into(), b"MM".to_vec()),
         ("meshes/folder.m/".into(), vec![]),
         ("tex/folder.png/".into(), vec![]),
         ("sky/".into(), vec![]),
@@ -710,9 +730,9 @@ fn errors_in_referenced_files_name_scene_key_and_file() {
         (
             COLOR_BG,
             COLOR_OD,
-            "file = \"meshes/shape.stl\"",
+            "file = \"meshes/shape.3ds\"",
             format!(
-                "{s}:22: mesh[1].file: {d}/meshes/shape.stl: unknown mesh format '.stl'; mesh files are .m, .obj, .ply"
+                "{s}:22: mesh[1].file: {d}/meshes/shape.3ds: unknown mesh format '.3ds'; mesh files are .m, .obj, .ply, .stl, .gltf, .glb"
             ),
         ),
         (
@@ -770,7 +790,7 @@ fn missing_file_lists_every_folder_searched() {
     );
     assert!(e.starts_with(&want), "want {want:?}\n got {e:?}");
     assert!(
-        e.ends_with(whitted::io::scene_file::PROJECT_DATA),
+        e.ends_with(whitted::io::scene::PROJECT_DATA),
         "the project's data folder ends the search path: {e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
@@ -827,9 +847,9 @@ fn partial_vertex_attributes_load_and_take_the_materials_colour() {
 /// were built one by one before the caps were checked.
 #[test]
 fn caps_are_checked_before_generating_shapes() {
-    use whitted::io::scene_file::MAX_SCENE_TRIANGLES;
+    use whitted::io::scene::MAX_SCENE_TRIANGLES;
     use whitted::scene::shapes::sphere_triangle_count;
-    let per = sphere_triangle_count(whitted::io::scene_file::SPHERE_SEGMENTS);
+    let per = sphere_triangle_count(whitted::io::scene::SPHERE_SEGMENTS);
     assert_eq!(per, 9024);
     assert!(3719 * per > MAX_SCENE_TRIANGLES && 3718 * per <= MAX_SCENE_TRIANGLES);
     let sphere = "[[mesh]]\nmaterial = \"m\"\nshape = \"sphere\"\n";
@@ -863,12 +883,12 @@ fn caps_are_checked_before_generating_shapes() {
 /// `whitted info` on a file type it does not read says which types it does.
 #[test]
 fn info_on_an_unknown_file_type_lists_the_types() {
-    let dir = scene_dir("info", &[("x.stl", b"solid x\nendsolid x\n")]);
-    let e = whitted::info::run(&dir.join("x.stl"), false)
+    let dir = scene_dir("info", &[("x.3ds", b"MM")]);
+    let e = whitted::info::run(&dir.join("x.3ds"), false)
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("x.stl: not a file type whitted reads; it reads meshes (.m, .obj, .ply), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
+        e.contains("x.3ds: not a file type whitted reads; it reads meshes (.m, .obj, .ply, .stl, .gltf, .glb), scenes (.toml), images (.png, .jpg, .jpeg, .tga, .bmp, .hdr, .exr) and cube-map folders"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);

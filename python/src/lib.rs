@@ -225,8 +225,8 @@ impl Raycaster {
         Ok(self.add(&positions, &tris))
     }
 
-    /// Add the mesh in a file whitted reads (`.m`, `.obj`, `.ply`); returns its id and the
-    /// loader's warnings.
+    /// Add the mesh in a file whitted reads (`.m`, `.obj`, `.ply`, `.stl`, `.gltf`, `.glb`);
+    /// returns its id and the loader's warnings.
     fn add_mesh(&mut self, py: Python<'_>, path: PathBuf) -> PyResult<(u32, Vec<String>)> {
         let (mesh, warnings) = py
             .detach(|| whitted::io::load_mesh(&path))
@@ -572,7 +572,7 @@ impl PyScene {
     #[new]
     #[pyo3(signature = (source, defines=Vec::new()))]
     fn new(py: Python<'_>, source: &str, defines: Vec<String>) -> PyResult<Self> {
-        use whitted::io::scene_file::{SceneFile, SearchPath, build_scene};
+        use whitted::io::scene::{SceneFile, SearchPath, build_scene};
         let load = || -> whitted::Result<(whitted::Scene, Vec<String>)> {
             let path = Path::new(source);
             let (file, label, dir, mut warnings) =
@@ -592,7 +592,7 @@ impl PyScene {
             Ok((scene, warnings))
         };
         let (scene, warnings) = py.detach(load).map_err(|e| {
-            let named = whitted::io::scene_file::overrides_named(&e.to_string(), &defines);
+            let named = whitted::io::scene::overrides_named(&e.to_string(), &defines);
             if named.is_empty() {
                 whitted_error("scene", e)
             } else {
@@ -669,7 +669,7 @@ impl PyScene {
         let (image, layers) = py
             .detach(|| {
                 on_pool(threads, || -> whitted::Result<_> {
-                    whitted::io::scene_file::check_size(scene.width as u64, scene.height as u64)
+                    whitted::io::scene::check_size(scene.width as u64, scene.height as u64)
                         .map_err(Error::Usage)?;
                     let world = whitted::render::World::new(scene);
                     let image = world.render_image(&settings)?;

@@ -38,8 +38,8 @@ builtin_scenes = _whitted.builtin_scenes
 
 
 def load_mesh(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
-    """A mesh file whitted reads (``.m``, ``.obj``, ``.ply``) as ``(vertices [N, 3] float32,
-    triangles [M, 3] uint32)``."""
+    """A mesh file whitted reads (``.m``, ``.obj``, ``.ply``, ``.stl``, ``.gltf``, ``.glb``) as
+    ``(vertices [N, 3] float32, triangles [M, 3] uint32)``."""
     v, t, _ = _whitted.load_mesh(os.fspath(path))
     return v.reshape(-1, 3), t.reshape(-1, 3)
 
@@ -138,8 +138,8 @@ class RaycastingScene:
         return self._r.add_triangles(v, t)
 
     def add_mesh(self, path: Union[str, os.PathLike]) -> int:
-        """Add the mesh in a file whitted reads (``.m``, ``.obj``, ``.ply``); returns its
-        geometry id. Loader warnings are appended to ``self.warnings``."""
+        """Add the mesh in a file whitted reads (``.m``, ``.obj``, ``.ply``, ``.stl``, ``.gltf``,
+        ``.glb``); returns its geometry id. Loader warnings are appended to ``self.warnings``."""
         gid, warnings = self._r.add_mesh(os.fspath(path))
         self.warnings.extend(warnings)
         return gid
@@ -282,9 +282,10 @@ def _defines(defines: Optional[Union[Mapping, Iterable[str]]]) -> list:
 
 class Scene:
     """A scene to render: a built-in name (``builtin_scenes()``), a TOML scene file or a
-    mesh file (``.m``, ``.obj``, ``.ply``, framed at 1024x768), with ``defines`` overriding
-    scene-file keys as the command line's ``-D`` does (``{"render.depth": 3}`` or
-    ``["render.depth=3"]``). ``width`` and ``height`` may be changed after loading."""
+    mesh file (``.m``, ``.obj``, ``.ply``, ``.stl``, ``.gltf``, ``.glb``, framed at 1024x768),
+    with ``defines`` overriding scene-file keys as the command line's ``-D`` does
+    (``{"render.depth": 3}`` or ``["render.depth=3"]``). ``width`` and ``height`` may be changed
+    after loading."""
 
     def __init__(self, source: Union[str, os.PathLike], defines=None):
         self._s = _whitted.Scene(os.fspath(source), _defines(defines))

@@ -42,8 +42,9 @@ use std::path::{Path, PathBuf};
 #[cfg_attr(feature = "cli", derive(clap::Args))]
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    /// Meshes (`.m`, `.obj` or `.ply`); default `meshes/kitten.m` from the current folder, the
-    /// `WHITTED_ASSETS` folders or the copy whitted ships (the search path of scene files).
+    /// Meshes (`.m`, `.obj`, `.ply`, `.stl`, `.gltf` or `.glb`); default `meshes/kitten.m` from
+    /// the current folder, the `WHITTED_ASSETS` folders or the copy whitted ships (the search
+    /// path of scene files).
     pub meshes: Vec<PathBuf>,
     /// Tracing threads (also the peer's `--threads`); 1 traces on the calling thread.
     #[cfg_attr(feature = "cli", arg(long, short = 't', default_value_t = 1))]
@@ -222,7 +223,7 @@ pub fn run(opts: &Options) -> crate::Result<()> {
     if meshes.is_empty() {
         // the kitten, found as a scene file finds it: the current folder, the WHITTED_ASSETS
         // folders, then the copy whitted ships.
-        meshes.push(crate::io::scene_file::SearchPath::for_scene(None).resolve("meshes/kitten.m")?);
+        meshes.push(crate::io::scene::SearchPath::for_scene(None).resolve("meshes/kitten.m")?);
     }
     let mut reports = vec![];
     for m in &meshes {

@@ -4,8 +4,9 @@
 
 use crate::error::{Error, Result};
 use crate::io::image::{decode_cubemap_capped, decode_texture_capped};
-use crate::io::scene_file::{SceneFile, SearchPath, build_scene};
-use crate::io::{mfile, obj, ply};
+use crate::io::model::NO_MATERIAL;
+use crate::io::scene::{SceneFile, SearchPath, build_scene};
+use crate::io::{mfile, obj, ply, stl};
 use std::path::{Path, PathBuf};
 
 /// The `.m` reader on arbitrary bytes.
@@ -29,6 +30,35 @@ pub fn ply(data: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// The STL reader (ASCII and binary) on arbitrary bytes.
+pub fn stl(data: &[u8]) -> Result<()> {
+    let (mesh, _) = stl::parse_stl(data, Path::new("fuzz.stl"))?;
+    check_mesh(&mesh);
+    Ok(())
+}
+
+/// The glTF reader (JSON or GLB) on arbitrary bytes; buffers and images named by file are
+/// never read (each such name is an error).
+pub fn gltf(data: &[u8]) -> Result<()> {
+    let path = Path::new("fuzz.gltf");
+    let (model, _) = crate::io::gltf::parse_with(data, path, &mut |name| {
+        Err(Error::parse(
+            Path::new(name),
+            0,
+            "files are not read while fuzzing",
+        ))
+    })?;
+    check_mesh(&model.mesh);
+    if let Some(f) = &model.face_materials {
+        assert_eq!(f.len(), model.mesh.triangles.len());
+        assert!(
+            f.iter()
+                .all(|&m| m == NO_MATERIAL || (m as usize) < model.materials.len())
+        );
+    }
+    Ok(())
+}
+
 /// The OBJ reader with materials: the OBJ is the bytes before the first `--mtl--` line, the
 /// MTL file every `mtllib` names is the bytes after it (never a file on disk).
 pub fn obj_mtl(data: &[u8]) -> Result<()> {
@@ -45,7 +75,7 @@ pub fn obj_mtl(data: &[u8]) -> Result<()> {
         assert_eq!(f.len(), model.mesh.triangles.len());
         assert!(
             f.iter()
-                .all(|&m| m == obj::NO_MATERIAL || (m as usize) < model.materials.len())
+                .all(|&m| m == NO_MATERIAL || (m as usize) < model.materials.len())
         );
     }
     Ok(())

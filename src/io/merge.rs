@@ -85,7 +85,7 @@ fn open(path: &Path) -> Result<(PartHeader, Decoder)> {
             ),
         ));
     }
-    crate::io::scene_file::check_size(display.x1 as u64, display.y1 as u64)
+    crate::io::scene::check_size(display.x1 as u64, display.y1 as u64)
         .map_err(|e| Error::image(path, format!("display window: {e}")))?;
     let data = window(h.own_attributes.layer_position, h.layer_size, "data")?;
     if data.is_empty() || !display.contains(&data) {

@@ -1,9 +1,11 @@
-//! `whitted render model.obj|.ply|.m`: the scene a mesh file gets when it is rendered alone.
+//! `whitted render model.obj|.ply|.stl|.gltf|.m`: the scene a mesh file gets when it is
+//! rendered alone.
 //!
-//! The camera looks at the centre of the bounding box from the canonical scenes' direction
-//! (SCENES.md §5: `eye - look_at = (1.6, 1.05, 4.4)`, to the front, right and above), far
-//! enough that the box's bounding sphere fits the narrower field of view with a 10% margin
-//! (the canonical kitten view has the same ratio of distance to radius, 3.6). The canonical
+//! The camera (unless the file brings its own: a glTF camera) looks at the centre of the
+//! bounding box from the canonical scenes' direction (SCENES.md §5: `eye - look_at = (1.6,
+//! 1.05, 4.4)`, to the front, right and above), far enough that the box's bounding sphere fits
+//! the narrower field of view with a 10% margin (the canonical kitten view has the same ratio
+//! of distance to radius, 3.6). The canonical
 //! lights keep their directions and their distances relative to the kitten's bounding sphere
 //! (radius 1.333), scaled to the model's; their intensities are the canonical ones. A model
 //! whose materials emit (`Ke`) is lit by its emitters instead (`scene::emitter_lights`).
@@ -12,7 +14,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::load_model;
-use crate::io::scene_file::{
+use crate::io::scene::{
     BackgroundDesc, CameraDesc, ImageDesc, LightDesc, MeshDesc, RenderDesc, SceneFile,
 };
 use glam::Vec3;
@@ -86,12 +88,13 @@ pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile
     }
     let scene = SceneFile {
         image: ImageDesc { width, height },
-        camera: CameraDesc {
+        // The file's own camera (glTF), else the framing above.
+        camera: model.camera.unwrap_or(CameraDesc {
             eye: eye.to_array(),
             look_at: centre.to_array(),
             up: [0.0, 1.0, 0.0],
             vfov: VFOV,
-        },
+        }),
         render: RenderDesc {
             depth: 6,
             cull_backfaces: false,

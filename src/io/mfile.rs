@@ -5,7 +5,8 @@
 //! unknown attribute keys and record types (skipped), polygons (fan-triangulated).
 //! Refused with file and line: missing or extra coordinates, NaN / inf / out-of-range numbers,
 //! undefined or duplicate vertex ids, ids <= 0, malformed attribute tuples, unbalanced braces,
-//! binary data, no faces.
+//! binary data, no faces. A face id given twice is a warning naming both lines (both faces
+//! are kept: the id names nothing else).
 //!
 //! Files where only some vertices carry `uv=`, `rgb=` or `normal=` exist in the wild: they load,
 //! with one warning that counts the gaps. A missing uv is (0, 0); a missing normal is the
@@ -66,6 +67,11 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     let mut attrs: Vec<(VertexAttrs, usize)> = Vec::new();
     // (line, vertex ids) of each face, resolved once every vertex is known.
     let mut faces: Vec<(usize, Vec<u64>)> = Vec::new();
+    // The line of each face id, and the first id given twice (`(line, id, first line)`) with
+    // how many more were: duplicate faces are kept, with a warning.
+    let mut face_ids: HashMap<u64, usize> = HashMap::new();
+    let mut duplicate_face: Option<(usize, u64, usize)> = None;
+    let mut more_duplicates = 0usize;
 
     for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = index + 1;
@@ -130,6 +136,14 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
                 if let Some(b) = body {
                     parse_attrs(b).map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
                 }
+                if let Some(&first) = face_ids.get(&id) {
+                    match duplicate_face {
+                        None => duplicate_face = Some((line_no, id, first)),
+                        Some(_) => more_duplicates += 1,
+                    }
+                } else {
+                    face_ids.insert(id, line_no);
+                }
                 faces.push((line_no, verts));
             }
             // Edge, Corner and any other record type: not needed for rendering.
@@ -159,6 +173,16 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     }
 
     let mut warnings = Vec::new();
+    if let Some((line, id, first)) = duplicate_face {
+        let more = match more_duplicates {
+            0 => String::new(),
+            n => format!(" ({n} more faces repeat an id)"),
+        };
+        warnings.push(format!(
+            "{}:{line}: duplicate face id {id} (first at line {first}); both faces are kept{more}",
+            path.display()
+        ));
+    }
     // An attribute on some vertices only: the others get `fill` (and are counted).
     let n = attrs.len();
     let mut gaps = Vec::new();
@@ -471,6 +495,27 @@ mod tests {
         // Complete files have no gaps and no warning.
         let r = read_m(QUAD.as_bytes(), Path::new("t.m")).unwrap();
         assert!(r.warnings.is_empty() && r.missing_rgb.is_empty());
+    }
+
+    /// A face id given twice: a warning with the file, the line, the id and the first line;
+    /// every face is kept.
+    #[test]
+    fn duplicate_face_ids_warn_with_file_line_and_id() {
+        let (m, w) = parse(&QUAD.replace("Face 2 1 5 7", "Face 1 1 5 7")).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        assert_eq!(
+            w,
+            ["t.m:7: duplicate face id 1 (first at line 6); both faces are kept"]
+        );
+        let (_, w) = parse(&format!("{QUAD}Face 2 2 5 7\nFace 1 1 2 7\n")).unwrap();
+        assert_eq!(
+            w,
+            [
+                "t.m:8: duplicate face id 2 (first at line 7); both faces are kept \
+                 (1 more faces repeat an id)"
+            ]
+        );
+        assert!(parse(QUAD).unwrap().1.is_empty());
     }
 
     #[test]

@@ -1,27 +1,32 @@
-//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`), scenes (TOML), images.
+//! Reading and writing files: meshes (`.m`, `.obj`, `.ply`, `.stl`, `.gltf`, `.glb`), scenes
+//! (TOML), images.
 
 pub mod aov;
 pub mod fuzz;
+pub mod gltf;
 pub mod image;
 pub mod merge;
 pub mod mesh_scene;
 pub mod mfile;
+pub mod model;
 pub mod mtl;
 pub mod obj;
 pub mod output;
 pub mod ply;
 pub mod rays;
-pub mod scene_file;
+pub mod scene;
+pub mod stl;
 
 use crate::error::{Error, Result};
+use crate::io::model::Model;
 use crate::mesh::Mesh;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Largest file any loader reads (mesh, texture, scene): 4 GiB, checked before reading.
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
 
 /// Mesh file extensions the loaders read, in lower case (a mesh's format is its extension).
-pub const MESH_EXTENSIONS: [&str; 3] = ["m", "obj", "ply"];
+pub const MESH_EXTENSIONS: [&str; 6] = ["m", "obj", "ply", "stl", "gltf", "glb"];
 
 /// Check that `path` is a regular file under [`MAX_FILE_BYTES`], without reading it: folders,
 /// devices and FIFOs (`/dev/zero` would never end) are refused.
@@ -55,23 +60,21 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
-/// Load a mesh with the materials its file brings (OBJ: `mtllib`), by extension.
-pub fn load_model(path: &Path) -> Result<(obj::Model, Vec<String>)> {
+/// Load a mesh with the materials its file brings (OBJ: `mtllib`; glTF: `materials`), by
+/// extension.
+pub fn load_model(path: &Path) -> Result<(Model, Vec<String>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path),
-        _ => load_mesh(path).map(|(mesh, w)| {
-            (
-                obj::Model {
-                    mesh,
-                    ..Default::default()
-                },
-                w,
-            )
-        }),
+        "gltf" | "glb" => {
+            check_regular(path)?;
+            gltf::load_gltf_model(path)
+        }
+        _ => load_mesh(path).map(|(mesh, w)| (Model::plain(mesh), w)),
     }
 }
 
-/// Load a mesh by extension (`.m`, `.obj` or `.ply`); warnings are returned beside it.
+/// Load a mesh by extension (`.m`, `.obj`, `.ply`, `.stl`, `.gltf` or `.glb`); warnings are
+/// returned beside it.
 pub fn load_mesh(path: &Path) -> Result<(Mesh, Vec<String>)> {
     load_mesh_detail(path).map(|(m, w, _)| (m, w))
 }
@@ -84,6 +87,8 @@ pub fn load_mesh_detail(path: &Path) -> Result<(Mesh, Vec<String>, bool)> {
         "m" => mfile::parse_m_detail,
         "obj" => obj::parse_obj_detail,
         "ply" => ply::parse_ply_detail,
+        "stl" => stl::parse_stl_detail,
+        "gltf" | "glb" => gltf::parse_gltf_detail,
         _ => return Err(unknown_mesh_type(path)),
     };
     parse(&read_regular(path)?, path)
@@ -101,18 +106,24 @@ pub fn load_scene_mesh(path: &Path) -> Result<(Mesh, Vec<String>, Vec<u32>)> {
 
 /// [`load_model`] for a scene: also the vertices a `.m` file left without `rgb` where others
 /// have one (see [`load_scene_mesh`]).
-pub fn load_scene_model(path: &Path) -> Result<(obj::Model, Vec<String>, Vec<u32>)> {
+pub fn load_scene_model(path: &Path) -> Result<(Model, Vec<String>, Vec<u32>)> {
     match extension(path).as_str() {
         "obj" => obj::load_obj_model(path).map(|(m, w)| (m, w, Vec::new())),
-        _ => load_scene_mesh(path).map(|(mesh, w, missing)| {
-            (
-                obj::Model {
-                    mesh,
-                    ..Default::default()
-                },
-                w,
-                missing,
-            )
+        "gltf" | "glb" => load_model(path).map(|(m, w)| (m, w, Vec::new())),
+        "m" => {
+            let r = mfile::read_m(&read_regular(path)?, path)?;
+            let model = Model {
+                file_normals: r.file_normals,
+                ..Model::plain(r.mesh)
+            };
+            Ok((model, r.warnings, r.missing_rgb))
+        }
+        _ => load_mesh_detail(path).map(|(mesh, w, file_normals)| {
+            let model = Model {
+                file_normals,
+                ..Model::plain(mesh)
+            };
+            (model, w, Vec::new())
         }),
     }
 }
@@ -195,6 +206,21 @@ pub(crate) fn finish_mesh(mesh: &mut Mesh, path: &Path, warnings: &mut Vec<Strin
             "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
             path.display()
         ));
+    }
+}
+
+/// `dir/name` if it exists.
+pub(crate) fn find_beside(dir: &Path, name: &str) -> Option<PathBuf> {
+    let p = dir.join(name);
+    p.is_file().then_some(p)
+}
+
+/// A folder for messages: `.` for the empty path of a file named without one.
+pub(crate) fn display_dir(dir: &Path) -> String {
+    if dir.as_os_str().is_empty() {
+        ".".into()
+    } else {
+        dir.display().to_string()
     }
 }
 

@@ -7,7 +7,7 @@
 //! colours >= 0; errors name the file and line.
 
 use crate::error::{Error, Result};
-use crate::io::scene_file::{Coef, MaterialDesc};
+use crate::io::scene::schema::{Coef, MaterialDesc};
 use serde::Serialize;
 use std::path::Path;
 
@@ -229,7 +229,7 @@ pub fn to_material(
     let d = m.d.unwrap_or(1.0);
     let mut found = None;
     let texture = m.map_kd.as_ref().and_then(|name| {
-        let file = crate::io::obj::find_beside(dir, name);
+        let file = crate::io::find_beside(dir, name);
         found = Some(file.is_some());
         match (file, has_uv) {
             // Absolute, so the scene finds it whatever folders its search path holds.
@@ -252,7 +252,7 @@ pub fn to_material(
                     "{}: material '{}': map_Kd '{name}' not found in {}; using Kd",
                     m.origin,
                     m.name,
-                    crate::io::obj::display_dir(dir)
+                    crate::io::display_dir(dir)
                 ));
                 None
             }

@@ -3,34 +3,20 @@
 //! Every number must be finite, every face index (absolute or relative) must name an existing
 //! `v`/`vt`/`vn`, and errors name the file and line. Accepted: n-gons (fan-triangulated),
 //! `v x y z w`, `v x y z r g b` (vertex colours), comments with any bytes, `\` continuations,
-//! CRLF, `usemtl` per face group, several `mtllib` statements and file names with spaces.
+//! CRLF, `usemtl` per face group, several `mtllib` statements and file names with spaces,
+//! smoothing groups (`s N`, `s off`). Without `vn` a mesh is flat but for its smoothing
+//! groups (see [`Mesh::group_shaded`]).
 //! (The reader was tobj until materials and vertex colours were needed: tobj's single-index
 //! mode cannot map colours back when only some vertices have them, it panics on `Kd 0.5` in
 //! an MTL file, and it had to be fed a validated rewrite of the file anyway.)
 
 use crate::error::{Error, Result};
-use crate::io::mtl::{self, MtlInfo};
-use crate::io::scene_file::MaterialDesc;
+use crate::io::model::{Model, NO_MATERIAL};
+use crate::io::mtl;
 use crate::mesh::Mesh;
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-
-/// A mesh with the materials its file brings.
-#[derive(Clone, Debug, Default)]
-pub struct Model {
-    /// Its triangles.
-    pub mesh: Mesh,
-    /// Materials of the file (MTL), already mapped onto whitted's terms.
-    pub materials: Vec<MaterialDesc>,
-    /// What each MTL material said and which textures were found (for `whitted info`).
-    pub material_info: Vec<MtlInfo>,
-    /// Per triangle, an index into `materials`, or [`NO_MATERIAL`] (`None`: no face has one).
-    pub face_materials: Option<Vec<u32>>,
-}
-
-/// A triangle whose face group named no (known) material.
-pub const NO_MATERIAL: u32 = u32::MAX;
+use std::path::Path;
 
 /// Read and load an OBJ file ([`parse_obj`] on its bytes).
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
@@ -59,38 +45,24 @@ pub fn load_obj_model(path: &Path) -> Result<(Model, Vec<String>)> {
     parse_obj_model(&bytes, path, &mut |line, entry, warnings| {
         // `mtllib a.mtl b.mtl` names two files, `mtllib my materials.mtl` one with a space:
         // the whole entry when such a file exists, else each word.
-        let names: Vec<&str> = if find_beside(&dir, entry).is_some() {
+        let names: Vec<&str> = if super::find_beside(&dir, entry).is_some() {
             vec![entry]
         } else {
             entry.split_whitespace().collect()
         };
         let mut out = Vec::new();
         for name in names {
-            match find_beside(&dir, name) {
+            match super::find_beside(&dir, name) {
                 Some(file) => out.extend(mtl::parse_mtl(&super::read_regular(&file)?, &file)?),
                 None => warnings.push(format!(
                     "{}:{line}: mtllib '{name}' not found in {}; its materials fall back to the default",
                     path.display(),
-                    display_dir(&dir)
+                    super::display_dir(&dir)
                 )),
             }
         }
         Ok(out)
     })
-}
-
-/// `dir/name` if it exists.
-pub(crate) fn find_beside(dir: &Path, name: &str) -> Option<PathBuf> {
-    let p = dir.join(name);
-    p.is_file().then_some(p)
-}
-
-pub(crate) fn display_dir(dir: &Path) -> String {
-    if dir.as_os_str().is_empty() {
-        ".".into()
-    } else {
-        dir.display().to_string()
-    }
 }
 
 /// Reads the materials of one `mtllib` statement: `(line, rest of the line, warnings)`.
@@ -120,7 +92,7 @@ pub fn parse_obj_model(
             }
         }
     }
-    let (mesh, _, face_groups) = assemble(&parsed, path, &mut warnings)?;
+    let (mesh, file_normals, face_groups) = assemble(&parsed, path, &mut warnings)?;
     // Map the usemtl names of the face groups onto the MTL materials.
     let mut group_material = Vec::with_capacity(parsed.usemtl.len());
     for (line, name) in &parsed.usemtl {
@@ -161,6 +133,8 @@ pub fn parse_obj_model(
             materials,
             material_info,
             face_materials,
+            file_normals,
+            camera: None,
         },
         warnings,
     ))
@@ -174,9 +148,10 @@ struct Parsed {
     colors: Vec<Option<Vec3>>,
     uvs: Vec<Vec2>,
     normals: Vec<Vec3>,
-    /// Corners of all faces, one after the other; `faces[k]` = (first corner, count, group).
+    /// Corners of all faces, one after the other; `faces[k]` = (first corner, count, group,
+    /// smoothing group: 0 = `s off`).
     corners: Vec<[u32; 3]>,
-    faces: Vec<(u32, u32, u32)>,
+    faces: Vec<(u32, u32, u32, u32)>,
     /// `(line, rest of the line)` of each `mtllib`.
     mtllibs: Vec<(usize, String)>,
     /// `(line, name)` of each `usemtl` (a face group).
@@ -192,6 +167,8 @@ const MAX_CORNERS: usize = 1 << 28;
 fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<Parsed> {
     let mut p = Parsed::default();
     let mut group = NO_MATERIAL;
+    // The smoothing group of the faces that follow (`s N`; `s off` and `s 0` are 0, flat).
+    let mut smoothing = 0u32;
     let mut logical = String::new();
     let mut first_line = 0;
     for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
@@ -322,7 +299,7 @@ fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<
                 if count < 3 {
                     return Err(err(format!("f: needs at least 3 vertices, has {count}")));
                 }
-                p.faces.push((first, count, group));
+                p.faces.push((first, count, group, smoothing));
             }
             "mtllib" => {
                 if rest.is_empty() {
@@ -337,7 +314,17 @@ fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<
                 group = p.usemtl.len() as u32;
                 p.usemtl.push((first_line, rest.to_string()));
             }
-            // o, g, s, l, p and anything else: not needed (all groups are merged).
+            "s" => {
+                smoothing = match rest {
+                    "off" => 0,
+                    n => n.parse().map_err(|_| {
+                        err(format!(
+                            "s: expected a smoothing group number or 'off', found '{n}'"
+                        ))
+                    })?,
+                };
+            }
+            // o, g, l, p and anything else: not needed (all groups are merged).
             _ => {}
         }
     }
@@ -359,8 +346,10 @@ fn parse_lines(bytes: &[u8], path: &Path, warnings: &mut Vec<String>) -> Result<
     Ok(p)
 }
 
-/// One vertex per distinct `(v, vt, vn)` corner, faces fan-triangulated in file order.
-/// Returns the mesh, whether normals came from the file, and each triangle's face group.
+/// One vertex per distinct `(v, vt, vn)` corner, faces fan-triangulated in file order, with
+/// the file's normals, else flat or smoothing-group normals (see
+/// [`Mesh::group_shaded`]). Returns the mesh, whether normals came from the file, and each
+/// triangle's face group.
 fn assemble(p: &Parsed, path: &Path, warnings: &mut Vec<String>) -> Result<(Mesh, bool, Vec<u32>)> {
     let corners = &p.corners;
     let all_uv = corners.iter().all(|c| c[1] != ABSENT);
@@ -369,7 +358,7 @@ fn assemble(p: &Parsed, path: &Path, warnings: &mut Vec<String>) -> Result<(Mesh
     let all_colors = p.colors.iter().all(Option::is_some);
     if any_n && !all_n {
         warnings.push(format!(
-            "{}: only some faces have normals; computing all normals",
+            "{}: only some faces have normals; they are ignored (shaded as a file without vn)",
             path.display()
         ));
     }
@@ -402,11 +391,13 @@ fn assemble(p: &Parsed, path: &Path, warnings: &mut Vec<String>) -> Result<(Mesh
         vertex.push(v);
     }
     let mut groups = Vec::new();
-    for &(first, count, group) in &p.faces {
+    let mut smoothing = Vec::new();
+    for &(first, count, group, s) in &p.faces {
         let f = &vertex[first as usize..(first + count) as usize];
         for k in 1..f.len() - 1 {
             mesh.triangles.push([f[0], f[k], f[k + 1]]);
             groups.push(group);
+            smoothing.push(s);
         }
     }
     if all_uv {
@@ -419,6 +410,15 @@ fn assemble(p: &Parsed, path: &Path, warnings: &mut Vec<String>) -> Result<(Mesh
         mesh.normals = Some(normals);
     }
     super::finish_mesh(&mut mesh, path, warnings);
+    // Normals as OBJ means them: the file's `vn`; without them, smooth within each smoothing
+    // group and flat elsewhere (no `s`, `s off`, `s 0`).
+    let mesh = if all_n {
+        mesh
+    } else if smoothing.iter().any(|&s| s != 0) {
+        mesh.group_shaded(&smoothing)
+    } else {
+        mesh.flat_shaded()
+    };
     Ok((mesh, all_n, groups))
 }
 
@@ -443,10 +443,100 @@ mod tests {
     }
 
     #[test]
-    fn positions_only_get_area_weighted_normals() {
+    fn positions_only_get_flat_normals() {
         let (m, _) = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
         assert!(m.uvs.is_none());
         assert_eq!(m.normals.unwrap()[0], Vec3::Z);
+    }
+
+    /// Every corner's normal is its triangle's geometric normal.
+    fn is_flat(m: &Mesh) -> bool {
+        let n = m.normals.as_ref().unwrap();
+        (0..m.triangles.len()).all(|t| {
+            let g = m.face_cross(t).normalize();
+            m.triangles[t]
+                .iter()
+                .all(|&v| n[v as usize].distance(g) < 1e-6)
+        })
+    }
+
+    const CUBE: &str =
+        "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n";
+    const CUBE_FACES: [&str; 6] = [
+        "f 1 4 3 2\n",
+        "f 5 6 7 8\n",
+        "f 1 2 6 5\n",
+        "f 4 8 7 3\n",
+        "f 1 5 8 4\n",
+        "f 2 3 7 6\n",
+    ];
+
+    /// No `vn`, no `s`: flat, 4 vertices per face of the cube (its two triangles share a
+    /// normal); `s off` and `s 0` are flat too.
+    #[test]
+    fn without_vn_faces_are_flat() {
+        for s in ["", "s off\n", "s 0\n"] {
+            let (m, _) = parse(&format!("{CUBE}{s}{}", CUBE_FACES.concat())).unwrap();
+            assert!(is_flat(&m), "{s:?}");
+            assert_eq!(m.positions.len(), 24, "{s:?}");
+        }
+    }
+
+    /// One smoothing group: one normal per corner of the cube, pointing out of it (area
+    /// weighted per triangle, so not exactly the diagonal: a quad's two triangles meet at two
+    /// of its corners); two groups:
+    /// smooth within each, apart across them; `s off` in between ends a group.
+    #[test]
+    fn smoothing_groups_smooth_within_each_group() {
+        let (m, _) = parse(&format!("{CUBE}s 1\n{}", CUBE_FACES.concat())).unwrap();
+        assert_eq!(m.positions.len(), 8);
+        let n = m.normals.as_ref().unwrap();
+        for (p, n) in m.positions.iter().zip(n) {
+            assert!(n.dot(p.normalize()) > 0.9, "{p} {n}");
+        }
+        // Faces 0-2 in group 1, 3-5 in group 2: a corner where both groups meet has two
+        // normals, and no face is flat.
+        let text = format!(
+            "{CUBE}s 1\n{}s 2\n{}",
+            CUBE_FACES[..3].concat(),
+            CUBE_FACES[3..].concat()
+        );
+        let (m, _) = parse(&text).unwrap();
+        assert!(m.positions.len() > 8 && m.positions.len() < 24);
+        assert!(!is_flat(&m));
+        // Group 1, then `s off`: the later faces are flat.
+        let text = format!(
+            "{CUBE}s 1\n{}s off\n{}",
+            CUBE_FACES[..3].concat(),
+            CUBE_FACES[3..].concat()
+        );
+        let (m, _) = parse(&text).unwrap();
+        let flat_tail = Mesh {
+            triangles: m.triangles[6..].to_vec(),
+            ..m.clone()
+        };
+        assert!(is_flat(&flat_tail));
+        assert!(!is_flat(&m));
+        let e = parse(&format!("{CUBE}s one\n{}", CUBE_FACES.concat()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.obj:9: s: expected a smoothing group number or 'off'"),
+            "{e}"
+        );
+    }
+
+    /// `vn` in the file: its normals are used as they are, smoothing groups or not.
+    #[test]
+    fn file_normals_win_over_smoothing_groups() {
+        let (m, _) =
+            parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0.6 0.8\ns off\nf 1//1 2//1 3//1\n").unwrap();
+        assert!(
+            m.normals
+                .unwrap()
+                .iter()
+                .all(|n| *n == Vec3::new(0.0, 0.6, 0.8))
+        );
     }
 
     #[test]

@@ -2,14 +2,14 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use whitted::io::scene_file::{SearchPath, build_scene};
+use whitted::io::scene::{SearchPath, build_scene};
 use whitted::render::{Settings, Stage, World};
 use whitted::scenes;
 
 /// The project's own data folder (the shipped `meshes/` and `textures/`): the tests need no
 /// `WHITTED_ASSETS` and nothing beside the repository.
 pub fn assets() -> PathBuf {
-    let dir = PathBuf::from(whitted::io::scene_file::PROJECT_DATA);
+    let dir = PathBuf::from(whitted::io::scene::PROJECT_DATA);
     assert!(
         dir.join("meshes/kitten.m").is_file(),
         "the shipped data is missing from {}",

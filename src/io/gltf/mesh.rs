@@ -1,0 +1,612 @@
+//! A glTF document's scene flattened into one [`Model`]: node transforms applied, every
+//! primitive's triangles appended with its material, accessors read after their bounds are
+//! checked.
+
+use super::accessor::{View, view};
+use super::{Document, Node, Primitive, at};
+use crate::error::Result;
+use crate::io::model::{Model, NO_MATERIAL};
+use crate::io::scene::schema::{
+    CameraDesc, Coef, MAX_SCENE_TRIANGLES, MaterialDesc, default_material,
+};
+use crate::mesh::Mesh;
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
+use std::borrow::Cow;
+use std::path::Path;
+
+/// Most vertices the scene's instances may copy together: three per triangle of the cap.
+const MAX_INSTANCED_VERTICES: u64 = 3 * MAX_SCENE_TRIANGLES;
+
+/// The model of `doc`'s default scene.
+pub(super) fn build(
+    doc: &Document,
+    buffers: &[Cow<'_, [u8]>],
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Model> {
+    let (instances, camera) = instances(doc, path)?;
+    let camera = camera.and_then(|(world, c)| view_of(doc, world, c, path, warnings));
+    // The caps first: every instance of a mesh repeats its triangles.
+    let (mut planned, mut planned_vertices) = (0u64, 0u64);
+    for &(_, m) in &instances {
+        let mesh = doc
+            .meshes
+            .get(m)
+            .ok_or_else(|| at(path, "nodes[].mesh", format!("no mesh {m}")))?;
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            // The accessor that counts the triangles, checked against its buffer first (so a
+            // count no buffer holds is named as such, not as the cap).
+            let key = format!("meshes[{m}].primitives[{p}]");
+            let n = match (prim.indices, prim.attributes.get("POSITION")) {
+                (Some(i), _) => {
+                    let kinds = [5121, 5123, 5125];
+                    view(
+                        doc,
+                        buffers,
+                        i,
+                        &["SCALAR"],
+                        &kinds,
+                        &format!("{key}.indices"),
+                        path,
+                    )?
+                    .count as u64
+                        / 3
+                }
+                (None, Some(&i)) => {
+                    let used_as = format!("{key}.attributes.POSITION");
+                    view(doc, buffers, i, &["VEC3"], &[5126], &used_as, path)?.count as u64 / 3
+                }
+                (None, None) => 0,
+            };
+            planned = planned.saturating_add(n);
+            if planned > MAX_SCENE_TRIANGLES {
+                return Err(at(
+                    path,
+                    &key,
+                    format!(
+                        "the scene's instances add up to over {MAX_SCENE_TRIANGLES} triangles (the cap)"
+                    ),
+                ));
+            }
+            // Every instance copies the primitive's positions too, used by its indices or
+            // not: a few triangles over millions of vertices, drawn by many nodes, must not
+            // fill the memory either.
+            let vertices = match prim.attributes.get("POSITION") {
+                Some(&i) => {
+                    let used_as = format!("{key}.attributes.POSITION");
+                    view(doc, buffers, i, &["VEC3"], &[5126], &used_as, path)?.count as u64
+                }
+                None => 0,
+            };
+            planned_vertices = planned_vertices.saturating_add(vertices);
+            if planned_vertices > MAX_INSTANCED_VERTICES {
+                return Err(at(
+                    path,
+                    &key,
+                    format!(
+                        "the scene's instances add up to over {MAX_INSTANCED_VERTICES} vertices (the cap)"
+                    ),
+                ));
+            }
+        }
+    }
+    let mut out = Mesh::default();
+    let (mut uvs, mut colors) = (Vec::new(), Vec::new());
+    let (mut all_uv, mut all_color, mut all_normals) = (true, true, true);
+    let mut face_materials = Vec::new();
+    for &(world, m) in &instances {
+        for (p, prim) in doc.meshes[m].primitives.iter().enumerate() {
+            let key = format!("meshes[{m}].primitives[{p}]");
+            let part = primitive(doc, buffers, prim, &key, world, path)?;
+            all_uv &= part.uvs.is_some();
+            all_color &= part.colors.is_some();
+            all_normals &= part.file_normals;
+            let base = out.positions.len() as u32;
+            let n = part.mesh.positions.len();
+            out.positions.extend(&part.mesh.positions);
+            out.normals
+                .get_or_insert_with(Vec::new)
+                .extend(part.mesh.normals.as_deref().unwrap_or_default());
+            uvs.extend(part.uvs.unwrap_or_else(|| vec![Vec2::ZERO; n]));
+            colors.extend(part.colors.unwrap_or_else(|| vec![Vec3::ONE; n]));
+            out.triangles
+                .extend(part.mesh.triangles.iter().map(|t| t.map(|v| v + base)));
+            let material = match prim.material {
+                Some(k) if k < doc.materials.len() => k as u32,
+                Some(k) => {
+                    return Err(at(
+                        path,
+                        &format!("{key}.material"),
+                        format!("no material {k}"),
+                    ));
+                }
+                None => NO_MATERIAL,
+            };
+            face_materials.extend(std::iter::repeat_n(material, part.mesh.triangles.len()));
+        }
+    }
+    if out.triangles.is_empty() {
+        return Err(at(path, "scenes", "no triangles in the scene's nodes"));
+    }
+    if all_uv {
+        out.uvs = Some(uvs);
+    }
+    if all_color {
+        out.colors = Some(colors);
+    }
+    let degenerate = out.degenerate_count();
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
+            path.display()
+        ));
+    }
+    let materials = materials(doc, path, all_uv, all_color, warnings)?;
+    let any_material = face_materials.iter().any(|&m| m != NO_MATERIAL);
+    Ok(Model {
+        mesh: out,
+        materials,
+        material_info: Vec::new(),
+        face_materials: any_material.then_some(face_materials),
+        file_normals: all_normals,
+        camera,
+    })
+}
+
+/// The instances of a scene: every (world transform, mesh), and the first (world transform,
+/// camera) met.
+type Instances = (Vec<(Mat4, usize)>, Option<(Mat4, usize)>);
+
+/// Every (world transform, mesh) of the default scene's node trees, in depth-first order,
+/// and the first node with a camera. A node met twice (a cycle, or a node with two parents)
+/// is an error.
+fn instances(doc: &Document, path: &Path) -> Result<Instances> {
+    let roots: Vec<usize> = match doc.scene.or((!doc.scenes.is_empty()).then_some(0)) {
+        Some(s) => doc
+            .scenes
+            .get(s)
+            .ok_or_else(|| at(path, "scene", format!("no scene {s}")))?
+            .nodes
+            .clone(),
+        None => {
+            let mut child = vec![false; doc.nodes.len()];
+            for n in &doc.nodes {
+                for &c in &n.children {
+                    if let Some(x) = child.get_mut(c) {
+                        *x = true;
+                    }
+                }
+            }
+            (0..doc.nodes.len()).filter(|&i| !child[i]).collect()
+        }
+    };
+    let mut seen = vec![false; doc.nodes.len()];
+    let mut out = Vec::new();
+    let mut camera = None;
+    // An explicit stack: a chain of a million nodes must not overflow the thread's stack.
+    let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
+    while let Some((i, parent)) = stack.pop() {
+        let node: &Node = doc.nodes.get(i).ok_or_else(|| {
+            at(
+                path,
+                "nodes",
+                format!("no node {i} (the file has {})", doc.nodes.len()),
+            )
+        })?;
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(at(
+                path,
+                &format!("nodes[{i}]"),
+                "reached twice: the node graph has a cycle or a node with two parents",
+            ));
+        }
+        let world = parent * local(node, i, path)?;
+        if let Some(m) = node.mesh {
+            if m >= doc.meshes.len() {
+                return Err(at(
+                    path,
+                    &format!("nodes[{i}].mesh"),
+                    format!("no mesh {m}"),
+                ));
+            }
+            out.push((world, m));
+        }
+        if let Some(c) = node.camera {
+            if c >= doc.cameras.len() {
+                return Err(at(
+                    path,
+                    &format!("nodes[{i}].camera"),
+                    format!("no camera {c}"),
+                ));
+            }
+            camera = camera.or(Some((world, c)));
+        }
+        for &c in node.children.iter().rev() {
+            stack.push((c, world));
+        }
+    }
+    Ok((out, camera))
+}
+
+/// Camera `c` at `world` as a scene camera: glTF cameras look down their -z with +y up. One
+/// that is not perspective, or that its transform makes degenerate, is skipped with a
+/// warning (the model is then framed as any mesh is).
+fn view_of(
+    doc: &Document,
+    world: Mat4,
+    c: usize,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Option<CameraDesc> {
+    let cam = &doc.cameras[c];
+    let mut skip = |why: &str| {
+        warnings.push(format!(
+            "{}: glTF cameras[{c}]: {why}; the model is framed instead",
+            path.display()
+        ));
+        None
+    };
+    let Some(p) = cam
+        .perspective
+        .as_ref()
+        .filter(|_| cam.kind == "perspective")
+    else {
+        return skip(&format!("a '{}' camera is not read", cam.kind));
+    };
+    let vfov = p.yfov.to_degrees();
+    if !(vfov > 0.0 && vfov < 180.0) {
+        return skip(&format!("yfov {} is not in (0, pi)", p.yfov));
+    }
+    let eye = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    if !eye.is_finite() || forward == Vec3::ZERO || forward.cross(up).length() < 1e-3 {
+        return skip("its node's transform leaves no view direction and up");
+    }
+    Some(CameraDesc {
+        eye: eye.to_array(),
+        look_at: (eye + forward).to_array(),
+        up: up.to_array(),
+        vfov,
+    })
+}
+
+/// A node's own transform: `matrix` (column-major), or scale, then rotation, then
+/// translation.
+fn local(node: &Node, i: usize, path: &Path) -> Result<Mat4> {
+    let key = format!("nodes[{i}]");
+    let m = match node.matrix {
+        Some(m) => {
+            if node.translation.is_some() || node.rotation.is_some() || node.scale.is_some() {
+                return Err(at(
+                    path,
+                    &format!("{key}.matrix"),
+                    "given with translation, rotation or scale",
+                ));
+            }
+            Mat4::from_cols_array(&m)
+        }
+        None => {
+            let q = node.rotation.map_or(Quat::IDENTITY, Quat::from_array);
+            if !(q.is_finite() && (q.length() - 1.0).abs() < 1e-3) {
+                return Err(at(
+                    path,
+                    &format!("{key}.rotation"),
+                    "not a unit quaternion",
+                ));
+            }
+            Mat4::from_scale_rotation_translation(
+                node.scale.map_or(Vec3::ONE, Vec3::from),
+                q.normalize(),
+                node.translation.map_or(Vec3::ZERO, Vec3::from),
+            )
+        }
+    };
+    if !m.is_finite() {
+        return Err(at(path, &key, "its transform is not finite"));
+    }
+    Ok(m)
+}
+
+/// One primitive's triangles in world space.
+struct Part {
+    /// Positions, triangles and normals (the file's, else flat).
+    mesh: Mesh,
+    /// `TEXCOORD_0`, v flipped to whitted's bottom-up convention.
+    uvs: Option<Vec<Vec2>>,
+    /// `COLOR_0` (alpha dropped).
+    colors: Option<Vec<Vec3>>,
+    /// Whether the normals are the file's.
+    file_normals: bool,
+}
+
+/// Primitive `key` of a mesh, transformed by `world`.
+fn primitive(
+    doc: &Document,
+    buffers: &[Cow<'_, [u8]>],
+    prim: &Primitive,
+    key: &str,
+    world: Mat4,
+    path: &Path,
+) -> Result<Part> {
+    if prim.mode != 4 {
+        let name = match prim.mode {
+            0 => "POINTS",
+            1 => "LINES",
+            2 => "LINE_LOOP",
+            3 => "LINE_STRIP",
+            5 => "TRIANGLE_STRIP",
+            6 => "TRIANGLE_FAN",
+            _ => "an unknown mode",
+        };
+        return Err(at(
+            path,
+            &format!("{key}.mode"),
+            format!("{name} ({}) is not read; only TRIANGLES (4)", prim.mode),
+        ));
+    }
+    let attr = |name: &str| prim.attributes.get(name).copied();
+    let use_as = |name: &str| format!("{key}.attributes.{name}");
+    let pos_i =
+        attr("POSITION").ok_or_else(|| at(path, &format!("{key}.attributes"), "no POSITION"))?;
+    let pos = view(
+        doc,
+        buffers,
+        pos_i,
+        &["VEC3"],
+        &[5126],
+        &use_as("POSITION"),
+        path,
+    )?;
+    let n = pos.count;
+    let mut positions = Vec::with_capacity(n);
+    for k in 0..n {
+        let p =
+            world.transform_point3(Vec3::new(pos.float(k, 0), pos.float(k, 1), pos.float(k, 2)));
+        if !p.is_finite() {
+            return Err(at(
+                path,
+                &format!("accessors[{pos_i}]"),
+                format!("element {k} is not finite (after its node's transform)"),
+            ));
+        }
+        positions.push(p);
+    }
+    let same_count = |v: &View, name: &str, i: usize| -> Result<()> {
+        if v.count != n {
+            return Err(at(
+                path,
+                &format!("accessors[{i}].count"),
+                format!("{} {name} elements for {n} positions", v.count),
+            ));
+        }
+        Ok(())
+    };
+    let mut triangles = Vec::new();
+    match prim.indices {
+        Some(ii) => {
+            let idx = view(
+                doc,
+                buffers,
+                ii,
+                &["SCALAR"],
+                &[5121, 5123, 5125],
+                &format!("{key}.indices"),
+                path,
+            )?;
+            if idx.count % 3 != 0 {
+                return Err(at(
+                    path,
+                    &format!("accessors[{ii}].count"),
+                    format!("{} indices is not a whole number of triangles", idx.count),
+                ));
+            }
+            triangles.reserve(idx.count / 3);
+            for t in 0..idx.count / 3 {
+                let tri = [idx.index(3 * t), idx.index(3 * t + 1), idx.index(3 * t + 2)];
+                if let Some(&v) = tri.iter().find(|&&v| v as usize >= n) {
+                    return Err(at(
+                        path,
+                        &format!("accessors[{ii}]"),
+                        format!(
+                            "index {v} (element {}) is out of range: {n} vertices",
+                            3 * t
+                        ),
+                    ));
+                }
+                triangles.push(tri);
+            }
+        }
+        None => {
+            if n % 3 != 0 {
+                return Err(at(
+                    path,
+                    &format!("accessors[{pos_i}].count"),
+                    format!("{n} positions without indices is not a whole number of triangles"),
+                ));
+            }
+            triangles.extend((0..n as u32 / 3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]));
+        }
+    }
+    // A mirroring transform turns counter-clockwise faces clockwise: swap two corners so the
+    // front stays the front.
+    if world.determinant() < 0.0 {
+        for t in &mut triangles {
+            t.swap(1, 2);
+        }
+    }
+    let mut mesh = Mesh {
+        positions,
+        triangles,
+        ..Default::default()
+    };
+    let uvs = match attr("TEXCOORD_0") {
+        Some(i) => {
+            let v = view(
+                doc,
+                buffers,
+                i,
+                &["VEC2"],
+                &[5126, 5121, 5123],
+                &use_as("TEXCOORD_0"),
+                path,
+            )?;
+            same_count(&v, "TEXCOORD_0", i)?;
+            let uv: Vec<Vec2> = (0..n)
+                .map(|k| Vec2::new(v.float(k, 0), 1.0 - v.float(k, 1)))
+                .collect();
+            if !uv.iter().all(|u| u.is_finite()) {
+                return Err(at(
+                    path,
+                    &format!("accessors[{i}]"),
+                    "a TEXCOORD_0 element is not finite",
+                ));
+            }
+            Some(uv)
+        }
+        None => None,
+    };
+    let colors = match attr("COLOR_0") {
+        Some(i) => {
+            let v = view(
+                doc,
+                buffers,
+                i,
+                &["VEC3", "VEC4"],
+                &[5126, 5121, 5123],
+                &use_as("COLOR_0"),
+                path,
+            )?;
+            same_count(&v, "COLOR_0", i)?;
+            let c: Vec<Vec3> = (0..n)
+                .map(|k| Vec3::new(v.float(k, 0), v.float(k, 1), v.float(k, 2)))
+                .collect();
+            if !c.iter().all(|c| c.is_finite() && c.cmpge(Vec3::ZERO).all()) {
+                return Err(at(
+                    path,
+                    &format!("accessors[{i}]"),
+                    "a COLOR_0 element is not finite and >= 0",
+                ));
+            }
+            Some(c)
+        }
+        None => None,
+    };
+    let file_normals = match attr("NORMAL") {
+        Some(i) => {
+            let v = view(doc, buffers, i, &["VEC3"], &[5126], &use_as("NORMAL"), path)?;
+            same_count(&v, "NORMAL", i)?;
+            let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+            let sign = if world.determinant() < 0.0 { -1.0 } else { 1.0 };
+            mesh.normals = Some(
+                (0..n)
+                    .map(|k| {
+                        sign * normal_matrix
+                            * Vec3::new(v.float(k, 0), v.float(k, 1), v.float(k, 2))
+                    })
+                    .collect(),
+            );
+            true
+        }
+        None => false,
+    };
+    // The file's normals, made unit (zero or non-finite ones replaced by the area-weighted
+    // normal); without them, flat, as glTF specifies.
+    mesh.ensure_normals();
+    mesh.uvs = uvs;
+    mesh.colors = colors;
+    if !file_normals {
+        mesh = mesh.flat_shaded();
+    }
+    Ok(Part {
+        uvs: mesh.uvs.take(),
+        colors: mesh.colors.take(),
+        mesh,
+        file_normals,
+    })
+}
+
+/// `materials` in whitted's terms: the default material's coefficients with `Od` from
+/// `baseColorFactor` (linear RGB, alpha dropped) or a `baseColorTexture` in an image file
+/// (the factor is then not applied: a material has one colour source), and `ke` from
+/// `emissiveFactor`.
+fn materials(
+    doc: &Document,
+    path: &Path,
+    has_uv: bool,
+    vertex_colors: bool,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<MaterialDesc>> {
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut out: Vec<MaterialDesc> = Vec::with_capacity(doc.materials.len());
+    for (i, m) in doc.materials.iter().enumerate() {
+        let key = format!("materials[{i}]");
+        let mut desc = default_material(vertex_colors);
+        // Names must be unique in a scene: a missing or repeated name gets the index.
+        desc.name = match &m.name {
+            Some(n) if !n.is_empty() && !out.iter().any(|d| &d.name == n) => n.clone(),
+            Some(n) if !n.is_empty() => format!("{n} #{i}"),
+            _ => format!("material{i}"),
+        };
+        let pbr = m.pbr_metallic_roughness.as_ref();
+        let factor = pbr.and_then(|p| p.base_color_factor).unwrap_or([1.0; 4]);
+        if !factor.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            return Err(at(
+                path,
+                &format!("{key}.pbrMetallicRoughness.baseColorFactor"),
+                "components must be finite and >= 0",
+            ));
+        }
+        if !vertex_colors {
+            desc.color = Some([factor[0], factor[1], factor[2]]);
+        }
+        if let Some(t) = pbr.and_then(|p| p.base_color_texture.as_ref()) {
+            let tkey = format!("{key}.pbrMetallicRoughness.baseColorTexture");
+            let image = doc
+                .textures
+                .get(t.index)
+                .ok_or_else(|| {
+                    at(
+                        path,
+                        &format!("{tkey}.index"),
+                        format!("no texture {}", t.index),
+                    )
+                })?
+                .source
+                .and_then(|s| doc.images.get(s));
+            let file = image
+                .and_then(|im| im.uri.as_deref())
+                .filter(|u| !u.starts_with("data:"));
+            match (file, has_uv && t.tex_coord == 0) {
+                (Some(uri), true) => {
+                    let name = super::percent_decode(uri).map_err(|e| at(path, &tkey, e))?;
+                    let f = dir.join(name);
+                    // Absolute, so a scene finds it whatever folders its search path holds.
+                    desc.texture = Some(std::path::absolute(&f).unwrap_or(f).to_string_lossy().into_owned());
+                    desc.color = None;
+                    desc.vertex_color = false;
+                }
+                _ => warnings.push(format!(
+                    "{}: glTF {tkey}: only image files read through TEXCOORD_0 are used (not embedded images); material '{}' uses its baseColorFactor",
+                    path.display(),
+                    desc.name
+                )),
+            }
+        }
+        // Emission, as MTL's Ke: shown on the surface, and lighting the scene through point
+        // lights of its own (see `scene::emitter_lights`).
+        if let Some(e) = m.emissive_factor {
+            if !e.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                return Err(at(
+                    path,
+                    &format!("{key}.emissiveFactor"),
+                    "components must be finite and >= 0",
+                ));
+            }
+            desc.ke = Coef::Rgb(e);
+        }
+        desc.kr = Some(Coef::Scalar(0.0));
+        out.push(desc);
+    }
+    Ok(out)
+}
