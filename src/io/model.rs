@@ -1,8 +1,9 @@
 //! What every mesh loader returns: a mesh with the materials its file brings.
 //!
-//! The loaders (`.m`, OBJ with MTL, PLY, STL) fill a [`Model`]; the scene builder
-//! ([`crate::io::scene`]) and `whitted info` read it. It depends on the scene schema only for
-//! [`MaterialDesc`], so loaders need nothing of the builder.
+//! The loaders (`.m`, OBJ with MTL, PLY, STL, glTF) fill a [`Model`]; the scene builder
+//! ([`crate::io::scene`]), `whitted info` and the scene of a mesh rendered alone read it. It
+//! depends on the scene schema only for [`MaterialDesc`] and [`CameraDesc`], so loaders need
+//! nothing of the builder.
 
 use crate::io::mtl::MtlInfo;
 use crate::io::scene::schema::{CameraDesc, MaterialDesc};
