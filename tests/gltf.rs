@@ -89,9 +89,10 @@ fn broken_gltf_is_one_error_line_with_the_json_path() {
     );
 }
 
-/// A glTF camera is the view of the model rendered alone (`whitted scene` prints it).
+/// A glTF camera is the view of the model rendered alone, and its lights light it
+/// (`whitted scene` prints both).
 #[test]
-fn a_gltf_camera_is_the_view() {
+fn a_gltf_camera_and_lights_make_the_scene() {
     let text =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube.gltf"))
             .unwrap();
@@ -103,11 +104,25 @@ fn a_gltf_camera_is_the_view() {
         .as_array_mut()
         .unwrap()
         .push(serde_json::json!({"camera": 0, "translation": [0, 0, 6]}));
+    doc["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [{"type": "point"}]}});
+    doc["scenes"][0]["nodes"] = serde_json::json!([0, 2]);
+    doc["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({
+            "translation": [3, 4, 5], "extensions": {"KHR_lights_punctual": {"light": 0}}
+        }));
     let file = tmp("camera.gltf");
     std::fs::write(&file, serde_json::to_string(&doc).unwrap()).unwrap();
     let (code, toml, err) = whitted(&["scene", file.to_str().unwrap()]);
     assert_eq!(code, Some(0), "{err}");
     assert!(toml.contains("eye = [0.0, 0.0, 6.0]"), "{toml}");
     assert!(toml.contains("look_at = [0.0, 0.0, 5.0]"), "{toml}");
+    // Its one light, alone, at 0.9.
+    assert!(
+        toml.contains("position = [3.0, 4.0, 5.0]") && toml.contains("intensity = [0.9, 0.9, 0.9]"),
+        "{toml}"
+    );
+    assert_eq!(toml.matches("[[light]]").count(), 1, "{toml}");
     render(file.to_str().unwrap(), &tmp("camera.png"));
 }

@@ -7,8 +7,9 @@
 //! `POSITION`, `NORMAL`, `TEXCOORD_0` and `COLOR_0` (floats, or normalised u8/u16 for uv and
 //! colour); buffers in the GLB `BIN` chunk, in `data:` URIs (base64) or in files beside the
 //! model; materials' `baseColorFactor`, a `baseColorTexture` in an image file and
-//! `emissiveFactor`; the first perspective camera met in the node trees. Lights, skins, morph
-//! targets and animations are not read; other primitive modes, sparse accessors and any `extensionsRequired` are refused by
+//! `emissiveFactor`; the first perspective camera met in the node trees; `KHR_lights_punctual`
+//! lights as point lights. Skins, morph targets and animations are not read; other primitive
+//! modes, sparse accessors and any `extensionsRequired` are refused by
 //! name. Every count and offset is checked against the bytes its buffer holds before
 //! anything is allocated; errors name the file and the JSON path (`accessors[3].count: ...`).
 //! The table of what maps to what is in docs/formats.md ("glTF").
@@ -54,6 +55,46 @@ struct Document {
     extensions_used: Vec<String>,
     #[serde(default)]
     extensions_required: Vec<String>,
+    extensions: Option<RootExtensions>,
+}
+
+/// The extensions whitted reads; any other in `extensionsRequired` is refused.
+const READ_EXTENSIONS: [&str; 1] = ["KHR_lights_punctual"];
+
+/// The document's `extensions`: the lights of `KHR_lights_punctual`.
+#[derive(Debug, Default, Deserialize)]
+struct RootExtensions {
+    #[serde(rename = "KHR_lights_punctual")]
+    lights: Option<LightList>,
+}
+
+/// `extensions.KHR_lights_punctual`.
+#[derive(Debug, Default, Deserialize)]
+struct LightList {
+    #[serde(default)]
+    lights: Vec<LightJson>,
+}
+
+/// `extensions.KHR_lights_punctual.lights[i]`.
+#[derive(Debug, Deserialize)]
+struct LightJson {
+    #[serde(rename = "type")]
+    kind: String,
+    color: Option<[f32; 3]>,
+    intensity: Option<f32>,
+}
+
+/// A node's `extensions`: its `KHR_lights_punctual` light.
+#[derive(Debug, Default, Deserialize)]
+struct NodeExtensions {
+    #[serde(rename = "KHR_lights_punctual")]
+    light: Option<NodeLight>,
+}
+
+/// `nodes[i].extensions.KHR_lights_punctual`.
+#[derive(Debug, Deserialize)]
+struct NodeLight {
+    light: usize,
 }
 
 /// `asset`: only the version is checked.
@@ -76,6 +117,7 @@ struct Node {
     children: Vec<usize>,
     mesh: Option<usize>,
     camera: Option<usize>,
+    extensions: Option<NodeExtensions>,
     matrix: Option<[f32; 16]>,
     translation: Option<[f32; 3]>,
     rotation: Option<[f32; 4]>,
@@ -257,18 +299,29 @@ pub fn parse_with(
             format!("'{}': only glTF 2.x is read", doc.asset.version),
         ));
     }
-    if let Some((i, name)) = doc.extensions_required.iter().enumerate().next() {
+    if let Some((i, name)) = doc
+        .extensions_required
+        .iter()
+        .enumerate()
+        .find(|(_, e)| !READ_EXTENSIONS.contains(&e.as_str()))
+    {
         return Err(at(
             path,
             &format!("extensionsRequired[{i}]"),
             format!("the model requires extension '{name}', which whitted does not read"),
         ));
     }
-    if !doc.extensions_used.is_empty() {
+    let unread: Vec<&str> = doc
+        .extensions_used
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !READ_EXTENSIONS.contains(e))
+        .collect();
+    if !unread.is_empty() {
         warnings.push(format!(
             "{}: glTF extensions not read (the model is drawn without them): {}",
             path.display(),
-            doc.extensions_used.join(", ")
+            unread.join(", ")
         ));
     }
     let buffers = load_buffers(&doc, bin, path, read_file)?;

@@ -7,8 +7,9 @@
 //! the narrower field of view with a 10% margin (the canonical kitten view has the same ratio
 //! of distance to radius, 3.6). The canonical
 //! lights keep their directions and their distances relative to the kitten's bounding sphere
-//! (radius 1.333), scaled to the model's; their intensities are the canonical ones. A model
-//! whose materials emit (`Ke`) is lit by its emitters instead (`scene::emitter_lights`).
+//! (radius 1.333), scaled to the model's; their intensities are the canonical ones. A glTF
+//! file's own lights replace them; a model whose materials emit (`Ke`) and has no lights of
+//! its own is lit by its emitters instead (`scene::emitter_lights`).
 //! Ambient and background are the canonical ones; culling is off (files do not always wind
 //! their faces consistently, and refraction must see back faces) and depth is 6.
 
@@ -63,7 +64,10 @@ pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile
         ));
     }
     let emits = model.materials.iter().any(|m| m.lamp && !m.ke.is_zero());
-    let lights = if emits {
+    // The file's own lights (glTF), else none beside emitters, else the canonical ones.
+    let lights = if !model.lights.is_empty() {
+        model.lights
+    } else if emits {
         Vec::new()
     } else {
         LIGHTS

@@ -1,11 +1,12 @@
 //! What every mesh loader returns: a mesh with the materials its file brings.
 //!
-//! The loaders (`.m`, OBJ with MTL, PLY, STL) fill a [`Model`]; the scene builder
-//! ([`crate::io::scene`]) and `whitted info` read it. It depends on the scene schema only for
-//! [`MaterialDesc`], so loaders need nothing of the builder.
+//! The loaders (`.m`, OBJ with MTL, PLY, STL, glTF) fill a [`Model`]; the scene builder
+//! ([`crate::io::scene`]), `whitted info` and the scene of a mesh rendered alone read it. It
+//! depends on the scene schema only for [`MaterialDesc`], [`CameraDesc`] and [`LightDesc`], so
+//! loaders need nothing of the builder.
 
 use crate::io::mtl::MtlInfo;
-use crate::io::scene::schema::{CameraDesc, MaterialDesc};
+use crate::io::scene::schema::{CameraDesc, LightDesc, MaterialDesc};
 use crate::mesh::Mesh;
 
 /// A mesh with the materials its file brings.
@@ -26,6 +27,9 @@ pub struct Model {
     /// The file's own view (glTF: its first perspective camera), used when the model is
     /// rendered alone instead of framing it.
     pub camera: Option<CameraDesc>,
+    /// The file's own point lights (glTF `KHR_lights_punctual`), used when the model is
+    /// rendered alone instead of the canonical lights.
+    pub lights: Vec<LightDesc>,
 }
 
 impl Model {

@@ -135,6 +135,7 @@ pub fn parse_obj_model(
             face_materials,
             file_normals,
             camera: None,
+            lights: Vec::new(),
         },
         warnings,
     ))

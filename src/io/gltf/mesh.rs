@@ -7,7 +7,7 @@ use super::{Document, Node, Primitive, at};
 use crate::error::Result;
 use crate::io::model::{Model, NO_MATERIAL};
 use crate::io::scene::schema::{
-    CameraDesc, Coef, MAX_SCENE_TRIANGLES, MaterialDesc, default_material,
+    CameraDesc, Coef, LightDesc, MAX_SCENE_TRIANGLES, MaterialDesc, default_material,
 };
 use crate::mesh::Mesh;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
@@ -24,7 +24,7 @@ pub(super) fn build(
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<Model> {
-    let (instances, camera) = instances(doc, path)?;
+    let (instances, camera, light_nodes) = instances(doc, path)?;
     let camera = camera.and_then(|(world, c)| view_of(doc, world, c, path, warnings));
     // The caps first: every instance of a mesh repeats its triangles.
     let (mut planned, mut planned_vertices) = (0u64, 0u64);
@@ -142,6 +142,7 @@ pub(super) fn build(
         ));
     }
     let materials = materials(doc, path, all_uv, all_color, warnings)?;
+    let lights = lights(doc, &light_nodes, &out, path, warnings)?;
     let any_material = face_materials.iter().any(|&m| m != NO_MATERIAL);
     Ok(Model {
         mesh: out,
@@ -150,12 +151,17 @@ pub(super) fn build(
         face_materials: any_material.then_some(face_materials),
         file_normals: all_normals,
         camera,
+        lights,
     })
 }
 
-/// The instances of a scene: every (world transform, mesh), and the first (world transform,
-/// camera) met.
-type Instances = (Vec<(Mat4, usize)>, Option<(Mat4, usize)>);
+/// The instances of a scene: every (world transform, mesh), the first (world transform,
+/// camera) met, and every (world transform, light).
+type Instances = (
+    Vec<(Mat4, usize)>,
+    Option<(Mat4, usize)>,
+    Vec<(Mat4, usize)>,
+);
 
 /// Every (world transform, mesh) of the default scene's node trees, in depth-first order,
 /// and the first node with a camera. A node met twice (a cycle, or a node with two parents)
@@ -183,6 +189,12 @@ fn instances(doc: &Document, path: &Path) -> Result<Instances> {
     let mut seen = vec![false; doc.nodes.len()];
     let mut out = Vec::new();
     let mut camera = None;
+    let mut lights = Vec::new();
+    let defined = doc
+        .extensions
+        .as_ref()
+        .and_then(|e| e.lights.as_ref())
+        .map_or(0, |l| l.lights.len());
     // An explicit stack: a chain of a million nodes must not overflow the thread's stack.
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
     while let Some((i, parent)) = stack.pop() {
@@ -221,11 +233,108 @@ fn instances(doc: &Document, path: &Path) -> Result<Instances> {
             }
             camera = camera.or(Some((world, c)));
         }
+        if let Some(l) = node.extensions.as_ref().and_then(|e| e.light.as_ref()) {
+            if l.light >= defined {
+                return Err(at(
+                    path,
+                    &format!("nodes[{i}].extensions.KHR_lights_punctual.light"),
+                    format!("no light {} (the file defines {defined})", l.light),
+                ));
+            }
+            lights.push((world, l.light));
+        }
         for &c in node.children.iter().rev() {
             stack.push((c, world));
         }
     }
-    Ok((out, camera))
+    Ok((out, camera, lights))
+}
+
+/// The `KHR_lights_punctual` lights of the scene's nodes as point lights. glTF lights fall
+/// off with the square of the distance and whitted's do not, so each light's `Ip` is its
+/// colour times its intensity over its squared distance to the model's centre (directional
+/// lights: times their intensity, placed 10 radii from the centre against their direction;
+/// spot lights: their cone is not read, with a warning), and all are scaled together so the
+/// brightest gives 0.9, the canonical key light's: the lights keep their balance and the model
+/// its exposure, whatever units the exporter wrote.
+fn lights(
+    doc: &Document,
+    nodes: &[(Mat4, usize)],
+    mesh: &Mesh,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<LightDesc>> {
+    let Some(list) = doc.extensions.as_ref().and_then(|e| e.lights.as_ref()) else {
+        return Ok(Vec::new());
+    };
+    let (lo, hi) = mesh.bounds().unwrap_or_default();
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let mut out = Vec::with_capacity(nodes.len());
+    for &(world, l) in nodes {
+        let key = format!("extensions.KHR_lights_punctual.lights[{l}]");
+        let light = &list.lights[l];
+        let colour = Vec3::from(light.color.unwrap_or([1.0; 3]));
+        let intensity = light.intensity.unwrap_or(1.0);
+        let valid = colour.is_finite()
+            && colour.cmpge(Vec3::ZERO).all()
+            && intensity.is_finite()
+            && intensity >= 0.0;
+        if !valid {
+            return Err(at(
+                path,
+                &key,
+                "color and intensity must be finite and >= 0",
+            ));
+        }
+        let (position, ip) = match light.kind.as_str() {
+            "directional" => {
+                let dir = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+                (centre - dir * 10.0 * radius, colour * intensity)
+            }
+            kind => {
+                if kind == "spot" {
+                    warnings.push(format!(
+                        "{}: glTF {key}: a spot light is drawn as a point light (its cone is not read)",
+                        path.display()
+                    ));
+                } else if kind != "point" {
+                    return Err(at(
+                        path,
+                        &format!("{key}.type"),
+                        format!("unknown light type '{kind}'"),
+                    ));
+                }
+                let p = world.transform_point3(Vec3::ZERO);
+                let d2 = p.distance_squared(centre).max((0.01 * radius).powi(2));
+                (p, colour * intensity / d2)
+            }
+        };
+        if !position.is_finite() || !ip.is_finite() {
+            return Err(at(
+                path,
+                &key,
+                "its node's transform puts it at no finite place",
+            ));
+        }
+        out.push((position, ip));
+    }
+    let brightest = out
+        .iter()
+        .map(|(_, ip)| ip.max_element())
+        .fold(0.0, f32::max);
+    let scale = if brightest > 0.0 {
+        0.9 / brightest
+    } else {
+        0.0
+    };
+    Ok(out
+        .into_iter()
+        .map(|(p, ip)| LightDesc {
+            position: p.to_array(),
+            intensity: (ip * scale).to_array(),
+        })
+        .collect())
 }
 
 /// Camera `c` at `world` as a scene camera: glTF cameras look down their -z with +y up. One

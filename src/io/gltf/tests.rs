@@ -352,6 +352,57 @@ fn the_first_perspective_camera_is_the_view() {
     assert!(err(&glb(&d, &bin)).contains("glTF nodes[3].camera: no camera 7"));
 }
 
+/// `KHR_lights_punctual`: point lights keep their balance at the model (intensity over the
+/// squared distance), the brightest scaled to 0.9; a directional light stands 10 radii away
+/// against its direction; a spot light is a point light, with a warning.
+#[test]
+fn punctual_lights_are_point_lights() {
+    let (mut d, bin) = doc(&SQUARE, Some(&[0, 1, 2, 0, 2, 3]));
+    d["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    d["extensionsRequired"] = json!(["KHR_lights_punctual"]);
+    d["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "intensity": 50, "color": [1, 0.5, 0]},
+        {"type": "point", "intensity": 100},
+        {"type": "directional", "intensity": 0.5},
+        {"type": "spot", "intensity": 1, "spot": {}},
+    ]}});
+    d["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4]);
+    let light = |l: usize, t: [f32; 3]| json!({"translation": t, "extensions": {"KHR_lights_punctual": {"light": l}}});
+    d["nodes"] = json!([
+        {"mesh": 0},
+        light(0, [0.5, 0.5, 10.0]),
+        light(1, [0.5, 0.5, 20.0]),
+        light(2, [0.0, 0.0, 0.0]),
+        light(3, [0.5, 0.5, 1.0]),
+    ]);
+    let (m, w) = parse(&glb(&d, &bin)).unwrap();
+    assert_eq!(m.lights.len(), 4);
+    let ip = |k: usize| Vec3::from(m.lights[k].intensity);
+    // The spot light, 1 from the centre, is the brightest.
+    assert!((ip(3).max_element() - 0.9).abs() < 1e-6, "{:?}", m.lights);
+    // The first is 10 away with 50 in red: half the spot's (1 at 1); the second, 100 at 20
+    // away, a quarter; the directional light's 0.5 is what it gives at the model: half.
+    assert!((ip(0).x / ip(3).x - 0.5).abs() < 1e-5 && ip(0).y == ip(0).x * 0.5);
+    assert!((ip(1).x / ip(3).x - 0.25).abs() < 1e-5);
+    assert!((ip(2).x / ip(3).x - 0.5).abs() < 1e-5);
+    // The directional light shines down -z: it stands on the +z side.
+    assert!(m.lights[2].position[2] > 1.0);
+    assert!(
+        w.iter()
+            .any(|w| w.contains("a spot light is drawn as a point light")),
+        "{w:?}"
+    );
+    assert!(
+        !w.iter().any(|w| w.contains("extensions not read")),
+        "{w:?}"
+    );
+    d["nodes"][1]["extensions"]["KHR_lights_punctual"]["light"] = json!(9);
+    assert!(
+        err(&glb(&d, &bin))
+            .contains("glTF nodes[1].extensions.KHR_lights_punctual.light: no light 9")
+    );
+}
+
 #[test]
 fn base64_decodes_with_and_without_padding() {
     assert_eq!(base64("TWFu").unwrap(), b"Man");
