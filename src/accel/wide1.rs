@@ -253,7 +253,7 @@ pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [
     let out = &mut out[..rays.len()];
     out.fill(None);
     if interleave::worth_it(accel, rays) {
-        interleaved_batch(accel, rays, cull, |i, w: &Closest| out[i] = w.best);
+        interleaved_batch(accel, rays, cull, |i, w: &Closest| out[i] = w.found);
     } else {
         walk_each::<false>(accel, rays.iter().copied().enumerate(), cull, |i, h| {
             out[i] = Some(h)
@@ -276,7 +276,7 @@ pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [b
     let out = &mut out[..rays.len()];
     out.fill(false);
     if interleave::worth_it(accel, rays) {
-        interleaved_batch(accel, rays, cull, |i, w: &Any| out[i] = w.hit.is_some());
+        interleaved_batch(accel, rays, cull, |i, w: &Any| out[i] = w.found.is_some());
     } else {
         walk_each::<true>(accel, rays.iter().copied().enumerate(), cull, |i, _| {
             out[i] = true

@@ -3,7 +3,7 @@
 //! one walk waits on memory the core works on the others.
 
 use super::RayWide;
-use super::walk::{Any, Closest};
+use super::walk::{Kind, Walker};
 use crate::accel::Accel;
 use crate::accel::stack::{STACK, stack_need};
 use crate::accel::wide::{Bvh8, Node8, TriBlock8, leaf_blocks};
@@ -188,29 +188,14 @@ pub(super) trait Walk: Copy {
     fn next(&self) -> u32;
 }
 
-impl Walk for Closest {
+impl<K: Kind> Walk for Walker<K> {
     #[inline(always)]
     fn root(ray: &Ray) -> Self {
-        Closest::new(RayWide::new(ray), ray.tfar, 0)
+        Walker::new(RayWide::new(ray), ray.tfar, 0)
     }
     #[inline(always)]
     fn step(&mut self, accel: &Accel, bvh: &Bvh8, cull: bool, stack: &mut [(u32, f32)]) -> bool {
-        Closest::step_deferred(self, accel, bvh, cull, stack)
-    }
-    #[inline(always)]
-    fn next(&self) -> u32 {
-        self.cur
-    }
-}
-
-impl Walk for Any {
-    #[inline(always)]
-    fn root(ray: &Ray) -> Self {
-        Any::new(RayWide::new(ray), ray.tfar, 0)
-    }
-    #[inline(always)]
-    fn step(&mut self, accel: &Accel, bvh: &Bvh8, cull: bool, stack: &mut [(u32, f32)]) -> bool {
-        Any::step_deferred(self, accel, bvh, cull, stack)
+        self.step_deferred(accel, bvh, cull, stack)
     }
     #[inline(always)]
     fn next(&self) -> u32 {
