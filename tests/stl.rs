@@ -2,41 +2,17 @@
 //! like the flat-shaded `cube.obj`), and a broken STL is one error line naming the file and
 //! where, with exit code 2.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn whitted(args: &[&str]) -> (Option<i32>, String, String) {
-    let r = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env_remove("WHITTED_ASSETS")
-        .output()
-        .unwrap();
-    (
-        r.status.code(),
-        String::from_utf8_lossy(&r.stdout).into_owned(),
-        String::from_utf8_lossy(&r.stderr).into_owned(),
-    )
-}
+use common::whitted;
+use std::path::{Path, PathBuf};
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("whitted-stl-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::scratch("stl", name)
 }
 
 fn render(mesh: &str, out: &Path) {
-    let (code, _, stderr) = whitted(&[
-        "render",
-        mesh,
-        "--width",
-        "64",
-        "--height",
-        "48",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, Some(0), "{mesh}: {stderr}");
+    common::render_small(mesh, out)
 }
 
 /// `whitted render x.stl` frames the mesh and renders it; the two encodings of one cube

@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 use whitted::io::scene::{SearchPath, build_scene};
 use whitted::render::{Settings, Stage, World};
 use whitted::scenes;
@@ -68,3 +69,41 @@ n = 20
 material = "glassmirror"
 shape = "cube"
 "#;
+
+/// Run the `whitted` binary from the repository's folder, without `WHITTED_ASSETS`: its exit
+/// code, standard output and standard error.
+pub fn whitted(args: &[&str]) -> (Option<i32>, String, String) {
+    let r = Command::new(env!("CARGO_BIN_EXE_whitted"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("WHITTED_ASSETS")
+        .output()
+        .unwrap();
+    (
+        r.status.code(),
+        String::from_utf8_lossy(&r.stdout).into_owned(),
+        String::from_utf8_lossy(&r.stderr).into_owned(),
+    )
+}
+
+/// `name` in this test process's scratch folder for `what` (made if missing).
+pub fn scratch(what: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("whitted-{what}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// `whitted render MESH` at 64x48 into `out`, which must succeed.
+pub fn render_small(mesh: &str, out: &Path) {
+    let (code, _, stderr) = whitted(&[
+        "render",
+        mesh,
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{mesh}: {stderr}");
+}
