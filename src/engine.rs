@@ -15,10 +15,10 @@
 //!
 //! Where two engines are candidates, which is faster depends on the mesh as well (how soon
 //! a packet's lanes part), so a batch of at least [`PILOT_MIN`] rays settles it by a pilot
-//! ([`pilot`]): runs of 192 rays covering one ray in 512 (at least 8 runs), spread over the
+//! ([`pilot`]): runs of 384 rays covering one ray in 512 (at least 8 runs), spread over the
 //! batch, each traced by both, the first 64 rays of a run untimed; the batch is then traced
 //! by the one with the smaller total (the pilot's rays again: 0.4% of a large batch's rays
-//! are traced twice more, 1.5% at the bench's 201,702 rays, 2.3% at [`PILOT_MIN`]). Smaller
+//! are traced twice more, 3.0% at the bench's 201,702 rays, 4.7% at [`PILOT_MIN`]). Smaller
 //! batches (and the renderer's tile-sized queues) take the first candidate.
 
 use crate::accel::Accel;
@@ -274,7 +274,12 @@ pub fn choose_by(s: Spread, avx512: bool) -> Engine {
 /// Rays of one pilot block.
 pub const PILOT_BLOCK: usize = 64;
 /// Blocks of one pilot run: the first warms the cache for the engine, the rest are timed.
-pub const PILOT_RUN: usize = 3;
+/// Runs of 3 blocks (128 rays timed) chose `hybrid8` for the 5.2M-triangle bench's
+/// compacted hits on an AMD Zen 3 without AVX-512, at 0.88 of `wide1`: a short run starts
+/// with colder caches than a ray amid the batch, which costs the single-ray walk more than
+/// the packets. With 6 `auto` was within 5% of the best engine on all five workloads at
+/// 20k, 1.3M and 5.2M triangles there (docs/performance.md).
+pub const PILOT_RUN: usize = 6;
 /// A pilot's runs cover one ray in this many, and there are at least [`PILOT_RUNS_MIN`].
 pub const PILOT_SHARE: usize = 512;
 /// Runs a pilot makes at least.
