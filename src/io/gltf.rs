@@ -18,6 +18,7 @@ mod accessor;
 mod mesh;
 #[cfg(test)]
 mod tests;
+mod view;
 
 use crate::error::{Error, Result};
 use crate::io::model::Model;
