@@ -328,6 +328,17 @@ impl Kind for ClosestHit {
 #[derive(Clone, Copy)]
 pub(super) struct AnyHit;
 
+/// The children the ray starts in and the others, as two bit sets to take in turn, the
+/// others first (`ORIGIN_LAST`; off, every child counts as another).
+#[inline(always)]
+fn origin_last(inside: u32) -> (u32, u32) {
+    if ORIGIN_LAST {
+        (inside, !inside)
+    } else {
+        (0, u32::MAX)
+    }
+}
+
 impl Kind for AnyHit {
     type Info = u32;
 
@@ -360,11 +371,7 @@ impl Kind for AnyHit {
         inside: &u32,
         cull: bool,
     ) -> bool {
-        let (inside, outside) = if ORIGIN_LAST {
-            (*inside, !*inside)
-        } else {
-            (0, u32::MAX)
-        };
+        let (inside, outside) = origin_last(*inside);
         if m != 0 {
             for mut m in [m & outside, m & inside] {
                 while m != 0 {
@@ -389,11 +396,7 @@ impl Kind for AnyHit {
         inside: &u32,
         stack: &mut [(u32, f32)],
     ) -> bool {
-        let (inside, outside) = if ORIGIN_LAST {
-            (*inside, !*inside)
-        } else {
-            (0, u32::MAX)
-        };
+        let (inside, outside) = origin_last(*inside);
         // pushed: the boxes the ray starts in first (so visited last), then the others; the
         // last one pushed is popped at once.
         for mut m in [inner & inside, inner & outside] {
