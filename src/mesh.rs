@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
-mod shading;
+pub(crate) mod shading;
 pub use shading::MAX_CREASE_PAIRS;
 
 /// Positions, triangles and optional per-vertex attributes. Every attribute vector, when

@@ -363,17 +363,7 @@ fn error_in_a_mesh_names_scene_key_then_file() {
 
 /// Runs `whitted ARGS` from the project folder; (exit code, stdout, stderr).
 fn run(args: &[&str]) -> (Option<i32>, String, String) {
-    let r = whitted()
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env_remove("WHITTED_ASSETS")
-        .output()
-        .unwrap();
-    (
-        r.status.code(),
-        String::from_utf8_lossy(&r.stdout).into_owned(),
-        String::from_utf8_lossy(&r.stderr).into_owned(),
-    )
+    common::whitted(args)
 }
 
 /// A failure: exit code 2 and one line on stderr holding every `want`.

@@ -48,6 +48,13 @@ pub fn gltf(data: &[u8]) -> Result<()> {
             "files are not read while fuzzing",
         ))
     })?;
+    check_model(&model);
+    Ok(())
+}
+
+/// A model's mesh holds together ([`check_mesh`]) and every face's material is one of its
+/// materials.
+fn check_model(model: &crate::io::model::Model) {
     check_mesh(&model.mesh);
     if let Some(f) = &model.face_materials {
         assert_eq!(f.len(), model.mesh.triangles.len());
@@ -56,7 +63,6 @@ pub fn gltf(data: &[u8]) -> Result<()> {
                 .all(|&m| m == NO_MATERIAL || (m as usize) < model.materials.len())
         );
     }
-    Ok(())
 }
 
 /// The OBJ reader with materials: the OBJ is the bytes before the first `--mtl--` line, the
@@ -70,14 +76,7 @@ pub fn obj_mtl(data: &[u8]) -> Result<()> {
     let (model, _) = obj::parse_obj_model(obj_bytes, Path::new("fuzz.obj"), &mut |_, _, _| {
         crate::io::mtl::parse_mtl(mtl_bytes, Path::new("fuzz.mtl"))
     })?;
-    check_mesh(&model.mesh);
-    if let Some(f) = &model.face_materials {
-        assert_eq!(f.len(), model.mesh.triangles.len());
-        assert!(
-            f.iter()
-                .all(|&m| m == NO_MATERIAL || (m as usize) < model.materials.len())
-        );
-    }
+    check_model(&model);
     Ok(())
 }
 

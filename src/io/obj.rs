@@ -450,16 +450,7 @@ mod tests {
         assert_eq!(m.normals.unwrap()[0], Vec3::Z);
     }
 
-    /// Every corner's normal is its triangle's geometric normal.
-    fn is_flat(m: &Mesh) -> bool {
-        let n = m.normals.as_ref().unwrap();
-        (0..m.triangles.len()).all(|t| {
-            let g = m.face_cross(t).normalize();
-            m.triangles[t]
-                .iter()
-                .all(|&v| n[v as usize].distance(g) < 1e-6)
-        })
-    }
+    use crate::mesh::shading::is_flat;
 
     const CUBE: &str =
         "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n";

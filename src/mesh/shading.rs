@@ -144,22 +144,26 @@ impl Mesh {
     }
 }
 
+/// Every corner's normal is its triangle's geometric normal (the tests' check of flat
+/// shading, here and in the loaders').
+#[cfg(test)]
+pub(crate) fn is_flat(m: &crate::mesh::Mesh) -> bool {
+    let n = m.normals.as_ref().unwrap();
+    (0..m.triangles.len()).all(|t| {
+        let g = m.face_cross(t).normalize();
+        m.triangles[t]
+            .iter()
+            .all(|&v| n[v as usize].distance(g) < 1e-6)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use crate::mesh::Mesh;
     use crate::scene::shapes;
     use glam::Vec3;
 
-    /// Every corner's normal is its triangle's geometric normal.
-    fn is_flat(m: &Mesh) -> bool {
-        let n = m.normals.as_ref().unwrap();
-        (0..m.triangles.len()).all(|t| {
-            let g = m.face_cross(t).normalize();
-            m.triangles[t]
-                .iter()
-                .all(|&v| n[v as usize].distance(g) < 1e-6)
-        })
-    }
+    use super::is_flat;
 
     #[test]
     fn flat_cube_has_face_normals_and_shares_vertices_within_a_face() {

@@ -180,16 +180,7 @@ fn errors_name_key_or_line() {
     }
 }
 
-/// Every corner's normal is its triangle's geometric normal.
-fn is_flat(m: &crate::mesh::Mesh) -> bool {
-    let n = m.normals.as_ref().unwrap();
-    (0..m.triangles.len()).all(|t| {
-        let g = m.face_cross(t).normalize();
-        m.triangles[t]
-            .iter()
-            .all(|&v| n[v as usize].distance(g) < 1e-6)
-    })
-}
+use crate::mesh::shading::is_flat;
 
 /// A scene of one mesh entry with `keys` added to it.
 fn one_mesh(entry: &str) -> Result<Scene> {
