@@ -7,8 +7,8 @@
 //! | tree | 1 ray | 8 rays | 16 rays (AVX-512) |
 //! |---|---|---|---|
 //! | BVH2 (`Accel::nodes`) | `scalar`: `intersect1` (the reference) | `packet`: `intersect8` | `packet16`: `intersect16` |
-//! | BVH8 (`Accel::wide`, `wide`) | `wide1`: `intersect_wide1`, `intersect_wide1_many` | `wide1`: `intersect_wide8` (lane by lane) | `packet16::wide16` (`hybrid16`'s any hit, and closest hit in one octant) |
-//! | BVH2, then BVH8 per lane | - | `hybrid8` (`packet`'s walk, `hand_off` the switch) | `packet16`: `intersect_hybrid16` |
+//! | BVH8 (`Accel::wide`, `wide`) | `wide1`: `intersect_wide1`, `intersect_wide1_many` | `wide8` (`hybrid8`'s any hit); `wide1`: `intersect_wide8` (lane by lane) | `packet16::wide16` (`hybrid16`'s any hit, and closest hit in one octant) |
+//! | BVH2, then BVH8 per lane | - | `hybrid8`'s closest hit (`packet`'s walk, `hand_off` the switch) | `packet16`: `intersect_hybrid16` |
 //!
 //! Each has its `occluded*` twin (any hit). Shared by all: the robustness constants and the
 //! closest-hit rule (`robust`), the traversal stacks (`stack`), the SoA triangle columns
@@ -26,6 +26,7 @@ mod stack;
 pub mod tri_soa;
 pub mod wide;
 pub mod wide1;
+mod wide8;
 
 pub use hybrid8::{intersect_hybrid8, occluded_hybrid8};
 pub use packet::{intersect8, occluded8};
