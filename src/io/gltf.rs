@@ -15,6 +15,7 @@
 //! The table of what maps to what is in docs/formats.md ("glTF").
 
 mod accessor;
+mod material;
 mod mesh;
 #[cfg(test)]
 mod tests;
