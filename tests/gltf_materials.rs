@@ -1,7 +1,8 @@
 //! glTF materials end to end: a GLB whose base colour texture is a PNG in its binary chunk,
 //! sampled MIRRORED_REPEAT along u and CLAMP_TO_EDGE along v, becomes a scene texture with
-//! those wrap modes and the texels written; its scene prints, reloads and renders; the scene
-//! key `wrap` is checked as every key is.
+//! those wrap modes and the texels written; its scene prints, reloads and renders; `whitted
+//! info` lists its meshes, instances, lights, cameras and materials; the scene key `wrap` is
+//! checked as every key is.
 
 mod common;
 
@@ -156,6 +157,42 @@ fn the_printed_scene_finds_the_embedded_image() {
         .concat(),
     );
     assert_eq!(code, Some(0), "{err}");
+}
+
+#[test]
+fn info_lists_meshes_instances_lights_cameras_and_materials() {
+    let glb = tmp("info.glb");
+    write_glb(&glb);
+    let (code, out, err) = whitted(&["info", "--json", glb.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        v["meshes"],
+        json!([{"index": 0, "name": "square", "primitives": 1, "triangles": 2, "nodes": [0]}])
+    );
+    assert_eq!(v["instances"], json!(1));
+    assert_eq!(
+        (v["lights"].clone(), v["cameras"].clone()),
+        (json!([]), json!([]))
+    );
+    let m = &v["materials"][0];
+    assert_eq!(m["name"], "tex");
+    assert_eq!(m["wrap"], json!(["mirrored_repeat", "clamp_to_edge"]));
+    assert!(
+        m["texture"]
+            .as_str()
+            .unwrap()
+            .ends_with("info.glb#images[0]"),
+        "{m}"
+    );
+    // The shipped cube: one material, a rough metal by glTF's defaults (all diffuse).
+    let (code, out, err) = whitted(&["info", "meshes/cube.gltf"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.contains("instances: 1\n"), "{out}");
+    assert!(
+        out.contains("\"kd\":1.0") && out.contains("\"ks\":0.0"),
+        "{out}"
+    );
 }
 
 /// `wrap` in a scene file: one mode or `[u, v]`, by glTF's names; anything else, or a wrap

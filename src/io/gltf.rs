@@ -18,6 +18,7 @@
 
 mod accessor;
 mod image;
+mod listing;
 mod material;
 mod mesh;
 #[cfg(test)]
@@ -25,6 +26,7 @@ mod tests;
 mod view;
 
 pub use image::{image_ref, load_image};
+pub use listing::listing;
 
 use crate::error::{Error, Result};
 use crate::io::model::Model;
