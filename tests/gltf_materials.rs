@@ -242,3 +242,48 @@ fn the_wrap_key_is_checked() {
         .to_string();
     assert!(e.contains("wrap: applies to a texture or checker"), "{e}");
 }
+
+/// An emissive material no face uses lights nothing, so the model keeps the canonical lights;
+/// once a face uses it, its emission lights the model instead.
+#[test]
+fn only_emitters_in_use_replace_the_canonical_lights() {
+    let glb = tmp("unused_lamp.glb");
+    write_glb(&glb);
+    let bytes = std::fs::read(&glb).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin = &bytes[20 + json_len + 8..];
+    doc["materials"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "lamp", "emissiveFactor": [1, 1, 1]}));
+    let write = |doc: &serde_json::Value, path: &Path| {
+        let mut text = serde_json::to_vec(doc).unwrap();
+        while !text.len().is_multiple_of(4) {
+            text.push(b' ');
+        }
+        let total = 12 + 8 + text.len() + 8 + bin.len();
+        let mut out = b"glTF".to_vec();
+        for word in [2, total, text.len()] {
+            out.extend((word as u32).to_le_bytes());
+        }
+        out.extend(b"JSON");
+        out.extend(text);
+        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(b"BIN\0");
+        out.extend(bin);
+        std::fs::write(path, out).unwrap();
+    };
+    write(&doc, &glb);
+    let (file, _) = whitted::io::mesh_scene::scene_for_mesh(&glb, 64, 48).unwrap();
+    assert_eq!(file.lights.len(), 2, "the canonical lights");
+    doc["meshes"][0]["primitives"][0]["material"] = json!(1);
+    let used = tmp("used_lamp.glb");
+    write(&doc, &used);
+    let (file, _) = whitted::io::mesh_scene::scene_for_mesh(&used, 64, 48).unwrap();
+    assert!(
+        file.lights.is_empty(),
+        "lit by its emitter: {:?}",
+        file.lights
+    );
+}
