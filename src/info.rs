@@ -79,6 +79,9 @@ pub fn info(path: &Path) -> Result<Info> {
                 // Through text, so that f32s print as written (0.8, not 0.800000011920929).
                 let text = serde_json::to_string(&model.materials).expect("materials serialise");
                 let materials: Value = serde_json::from_str(&text).expect("just written");
+                // Its meshes, instances, lights and cameras as the file lists them.
+                let bytes = crate::io::read_regular(path)?;
+                info.fields.extend(crate::io::gltf::listing(&bytes, path)?);
                 info.fields.push(("materials", materials));
             }
             Ok(info)

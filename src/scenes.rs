@@ -60,6 +60,7 @@ fn material(name: &str, od: Od, [ka, kd, ks, n, kt, ior]: [f32; 6]) -> MaterialD
         vertex_color: false,
         texture: None,
         checker: None,
+        wrap: None,
         ka: ka.into(),
         kd: kd.into(),
         ks: ks.into(),

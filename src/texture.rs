@@ -1,4 +1,5 @@
-//! Textures (bilinear, wrap = repeat) and cube maps (OpenGL faces, clamp to edge), SCENES.md §4.
+//! Textures (bilinear; wrap = repeat unless a material asks for mirrored repeat or clamp to
+//! edge) and cube maps (OpenGL faces, clamp to edge), SCENES.md §4.
 
 use glam::{Vec2, Vec3};
 
@@ -11,15 +12,37 @@ pub struct Texture {
     pub height: usize,
     /// `width * height` linear RGB texels, row-major.
     pub texels: Vec<Vec3>,
+    /// How [`Texture::sample_uv`] treats texels outside the image, along `u` then `v`
+    /// ([`Wrap::Repeat`] for both unless set).
+    pub wrap: [Wrap; 2],
 }
 
-/// How lookups outside `[0, w) x [0, h)` behave.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How lookups outside `[0, w) x [0, h)` behave: the texel a bilinear lookup reads for an
+/// index `i` past the edge, as OpenGL (and glTF's samplers) define the three modes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Wrap {
-    /// Wrap around (textures).
+    /// Wrap around, `i mod w` (textures, by default).
+    #[default]
     Repeat,
-    /// Clamp to the edge texel (cube-map faces).
+    /// Every other copy mirrored: `0 1 .. w-1 w-1 .. 1 0 0 1 ..` (glTF `MIRRORED_REPEAT`).
+    MirroredRepeat,
+    /// Clamp to the edge texel (cube-map faces; glTF `CLAMP_TO_EDGE`).
     Clamp,
+}
+
+impl Wrap {
+    /// The texel index in `0..n` that index `i` reads.
+    #[inline(always)]
+    fn index(self, i: i64, n: i64) -> i64 {
+        match self {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::MirroredRepeat => {
+                let m = i.rem_euclid(2 * n);
+                if m < n { m } else { 2 * n - 1 - m }
+            }
+            Wrap::Clamp => i.clamp(0, n - 1),
+        }
+    }
 }
 
 impl Texture {
@@ -31,7 +54,14 @@ impl Texture {
             width,
             height,
             texels,
+            wrap: [Wrap::Repeat; 2],
         }
+    }
+
+    /// The texture with `wrap` along `u` and `v` for [`Texture::sample_uv`].
+    pub fn with_wrap(mut self, wrap: [Wrap; 2]) -> Self {
+        self.wrap = wrap;
+        self
     }
 
     /// A procedural checkerboard of `n x n` squares (for the demo scene; no file needed).
@@ -50,19 +80,16 @@ impl Texture {
     }
 
     #[inline(always)]
-    fn texel(&self, x: i64, y: i64, wrap: Wrap) -> Vec3 {
+    fn texel(&self, x: i64, y: i64, [wrap_x, wrap_y]: [Wrap; 2]) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
-        let (x, y) = match wrap {
-            Wrap::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
-            Wrap::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
-        };
+        let (x, y) = (wrap_x.index(x, w), wrap_y.index(y, h));
         self.texels[(y * w + x) as usize]
     }
 
     /// Bilinear lookup at continuous texel coordinates (texel centres at `i + 0.5`... shifted
     /// by the caller: `x = u w - 0.5` puts texel `i`'s centre at `x = i`).
     #[inline(always)]
-    pub fn bilinear(&self, x: f32, y: f32, wrap: Wrap) -> Vec3 {
+    pub fn bilinear(&self, x: f32, y: f32, wrap: [Wrap; 2]) -> Vec3 {
         // Non-finite coordinates (from NaN uv) would make the weights NaN: look up texel 0.
         let (x, y) = if x.is_finite() && y.is_finite() {
             (x, y)
@@ -80,12 +107,12 @@ impl Texture {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// Texture colour at `uv`: `v = 0` is the bottom row, wrap = repeat.
+    /// Texture colour at `uv`: `v = 0` is the bottom row, wrapped as [`Texture::wrap`] says.
     #[inline]
     pub fn sample_uv(&self, uv: Vec2) -> Vec3 {
         let x = uv.x * self.width as f32 - 0.5;
         let y = (1.0 - uv.y) * self.height as f32 - 0.5;
-        self.bilinear(x, y, Wrap::Repeat)
+        self.bilinear(x, y, self.wrap)
     }
 }
 
@@ -133,7 +160,7 @@ impl CubeMap {
         f.bilinear(
             s * f.width as f32 - 0.5,
             t * f.height as f32 - 0.5,
-            Wrap::Clamp,
+            [Wrap::Clamp; 2],
         )
     }
 }
@@ -180,8 +207,76 @@ mod tests {
     #[test]
     fn clamp_to_edge() {
         let t = ramp();
-        assert_eq!(t.bilinear(-5.0, -5.0, Wrap::Clamp), Vec3::X);
-        assert_eq!(t.bilinear(9.0, 9.0, Wrap::Clamp), Vec3::ONE);
+        assert_eq!(t.bilinear(-5.0, -5.0, [Wrap::Clamp; 2]), Vec3::X);
+        assert_eq!(t.bilinear(9.0, 9.0, [Wrap::Clamp; 2]), Vec3::ONE);
+    }
+
+    /// A 3x2 texture with one distinct grey per texel: `10 * row + column` (row 0 on top).
+    fn strip() -> Texture {
+        let v = |c: f32| Vec3::splat(c);
+        Texture::new(
+            3,
+            2,
+            vec![v(0.0), v(1.0), v(2.0), v(10.0), v(11.0), v(12.0)],
+        )
+    }
+
+    /// The texel indices each mode reads, written out by hand from the OpenGL definitions.
+    #[test]
+    fn wrap_modes_pick_the_texels_opengl_defines() {
+        let n = 3;
+        let cases: [(Wrap, [i64; 10]); 3] = [
+            // i = -4 .. 5
+            (Wrap::Repeat, [2, 0, 1, 2, 0, 1, 2, 0, 1, 2]),
+            (Wrap::MirroredRepeat, [2, 2, 1, 0, 0, 1, 2, 2, 1, 0]),
+            (Wrap::Clamp, [0, 0, 0, 0, 0, 1, 2, 2, 2, 2]),
+        ];
+        for (wrap, want) in cases {
+            let got: Vec<i64> = (-4..6).map(|i| wrap.index(i, n)).collect();
+            assert_eq!(got, want, "{wrap:?}");
+        }
+        // A huge index (from a huge uv) stays in range for each mode.
+        for wrap in [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::Clamp] {
+            assert!((0..n).contains(&wrap.index(i64::MAX, n)), "{wrap:?}");
+            assert!((0..n).contains(&wrap.index(i64::MIN, n)), "{wrap:?}");
+        }
+    }
+
+    /// `sample_uv` through each wrap mode, against texels and blends computed by hand on the
+    /// 3x2 strip (x = 3u - 0.5, y = 2(1 - v) - 0.5).
+    #[test]
+    fn sample_uv_follows_the_texture_wrap_along_u_and_v() {
+        let grey = |t: &Texture, u: f32, v: f32| t.sample_uv(Vec2::new(u, v)).x;
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        // u = -1/6: x = -1, the centre of texel -1 (u = 7/6: texel 3, 11/6: texel 5);
+        // v = 0.75: y = 0, row 0 exactly.
+        let repeat = strip();
+        assert!(close(grey(&repeat, -1.0 / 6.0, 0.75), 2.0)); // texel -1 -> 2
+        assert!(close(grey(&repeat, 7.0 / 6.0, 0.75), 0.0)); // texel 3 -> 0
+        let mirror = strip().with_wrap([Wrap::MirroredRepeat, Wrap::Repeat]);
+        assert!(close(grey(&mirror, -1.0 / 6.0, 0.75), 0.0)); // texel -1 -> 0
+        assert!(close(grey(&mirror, 7.0 / 6.0, 0.75), 2.0)); // texel 3 -> 2
+        assert!(close(grey(&mirror, 11.0 / 6.0, 0.75), 0.0)); // texel 5 -> 0
+        let clamp = strip().with_wrap([Wrap::Clamp, Wrap::Repeat]);
+        assert!(close(grey(&clamp, -1.0 / 6.0, 0.75), 0.0));
+        assert!(close(grey(&clamp, 7.0 / 6.0, 0.75), 2.0));
+        // u = 0 (x = -0.5): half texel -1, half texel 0.
+        assert!(close(grey(&repeat, 0.0, 0.75), 1.0)); // (2 + 0) / 2
+        assert!(close(grey(&mirror, 0.0, 0.75), 0.0)); // (0 + 0) / 2
+        assert!(close(grey(&clamp, 0.0, 0.75), 0.0));
+        // Along v, on column 1 (u = 0.5): v = 1.25 is y = -1, row -1.
+        let rows = |w: Wrap| strip().with_wrap([Wrap::Repeat, w]);
+        assert!(close(grey(&rows(Wrap::Repeat), 0.5, 1.25), 11.0)); // row -1 -> 1
+        assert!(close(grey(&rows(Wrap::MirroredRepeat), 0.5, 1.25), 1.0)); // row -1 -> 0
+        assert!(close(grey(&rows(Wrap::Clamp), 0.5, 1.25), 1.0));
+        // v = -0.75: y = 3, row 3: repeat -> row 1, mirrored -> row 0 (rows 2, 3 mirror 1, 0),
+        // clamp -> row 1.
+        assert!(close(grey(&rows(Wrap::Repeat), 0.5, -0.75), 11.0));
+        assert!(close(grey(&rows(Wrap::MirroredRepeat), 0.5, -0.75), 1.0));
+        assert!(close(grey(&rows(Wrap::Clamp), 0.5, -0.75), 11.0));
+        // A blend across the mirrored edge: u = 1 (x = 2.5) reads texels 2 and 3 -> 2 and 2.
+        assert!(close(grey(&mirror, 1.0, 0.75), 2.0));
+        assert!(close(grey(&repeat, 1.0, 0.75), 1.0)); // (2 + 0) / 2
     }
 
     #[test]

@@ -6,19 +6,27 @@
 //! applied to its meshes; triangle primitives (mode 4), indexed (u8, u16, u32) or not;
 //! `POSITION`, `NORMAL`, `TEXCOORD_0` and `COLOR_0` (floats, or normalised u8/u16 for uv and
 //! colour); buffers in the GLB `BIN` chunk, in `data:` URIs (base64) or in files beside the
-//! model; materials' `baseColorFactor`, a `baseColorTexture` in an image file and
-//! `emissiveFactor`; the first perspective camera met in the node trees; `KHR_lights_punctual`
-//! lights as point lights. Skins, morph targets and animations are not read; other primitive
-//! modes, sparse accessors and any `extensionsRequired` are refused by
-//! name. Every count and offset is checked against the bytes its buffer holds before
+//! model; materials' metallic-roughness factors, `baseColorTexture` (an image file, a data URI
+//! or a buffer view, with its sampler's wrap modes), `emissiveFactor` and the
+//! `KHR_materials_transmission`, `KHR_materials_ior` and `KHR_materials_emissive_strength`
+//! extensions, in Whitted's terms (`gltf/material.rs`); the first perspective camera met in
+//! the node trees; `KHR_lights_punctual` lights as point lights. Skins, morph targets and
+//! animations are not read; other primitive modes, sparse accessors and any other
+//! `extensionsRequired` are refused by name. Every count and offset is checked against the bytes its buffer holds before
 //! anything is allocated; errors name the file and the JSON path (`accessors[3].count: ...`).
 //! The table of what maps to what is in docs/formats.md ("glTF").
 
 mod accessor;
+mod image;
+mod listing;
+mod material;
 mod mesh;
 #[cfg(test)]
 mod tests;
 mod view;
+
+pub use image::{image_ref, load_image};
+pub use listing::listing;
 
 use crate::error::{Error, Result};
 use crate::io::model::Model;
@@ -45,11 +53,13 @@ struct Document {
     #[serde(default)]
     buffers: Vec<Buffer>,
     #[serde(default)]
-    materials: Vec<MaterialJson>,
+    materials: Vec<material::MaterialJson>,
     #[serde(default)]
-    textures: Vec<TextureJson>,
+    textures: Vec<material::TextureJson>,
     #[serde(default)]
-    images: Vec<ImageJson>,
+    samplers: Vec<material::SamplerJson>,
+    #[serde(default)]
+    images: Vec<image::ImageJson>,
     #[serde(default)]
     cameras: Vec<CameraJson>,
     #[serde(default)]
@@ -60,7 +70,12 @@ struct Document {
 }
 
 /// The extensions whitted reads; any other in `extensionsRequired` is refused.
-const READ_EXTENSIONS: [&str; 1] = ["KHR_lights_punctual"];
+const READ_EXTENSIONS: [&str; 4] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+];
 
 /// The document's `extensions`: the lights of `KHR_lights_punctual`.
 #[derive(Debug, Default, Deserialize)]
@@ -193,45 +208,6 @@ struct BufferView {
 struct Buffer {
     uri: Option<String>,
     byte_length: u64,
-}
-
-/// `materials[i]`: its name and base colour.
-#[derive(Debug, Deserialize)]
-#[serde(rename_all = "camelCase")]
-struct MaterialJson {
-    name: Option<String>,
-    pbr_metallic_roughness: Option<Pbr>,
-    emissive_factor: Option<[f32; 3]>,
-}
-
-/// `materials[i].pbrMetallicRoughness`.
-#[derive(Debug, Deserialize)]
-#[serde(rename_all = "camelCase")]
-struct Pbr {
-    base_color_factor: Option<[f32; 4]>,
-    base_color_texture: Option<TextureRef>,
-}
-
-/// A material's reference to `textures[index]`.
-#[derive(Debug, Deserialize)]
-#[serde(rename_all = "camelCase")]
-struct TextureRef {
-    index: usize,
-    #[serde(default)]
-    tex_coord: u32,
-}
-
-/// `textures[i]`: an image.
-#[derive(Debug, Deserialize)]
-struct TextureJson {
-    source: Option<usize>,
-}
-
-/// `images[i]`: a file (by `uri`) or bytes in a buffer view.
-#[derive(Debug, Deserialize)]
-#[serde(rename_all = "camelCase")]
-struct ImageJson {
-    uri: Option<String>,
 }
 
 /// The GLB header's magic, `glTF`.

@@ -63,7 +63,15 @@ pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile
             "the bounding box is too large or too small to frame in f32",
         ));
     }
-    let emits = model.materials.iter().any(|m| m.lamp && !m.ke.is_zero());
+    // Emitters that some face uses: a library's unused lamp material lights nothing, and must
+    // not turn the canonical lights off.
+    let mut used = vec![false; model.materials.len()];
+    for &f in model.face_materials.iter().flatten() {
+        if let Some(u) = used.get_mut(f as usize) {
+            *u = true;
+        }
+    }
+    let emits = (model.materials.iter().zip(&used)).any(|(m, &u)| u && m.lamp && !m.ke.is_zero());
     // The file's own lights (glTF), else none beside emitters, else the canonical ones.
     let lights = if !model.lights.is_empty() {
         model.lights

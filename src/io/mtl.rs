@@ -309,6 +309,7 @@ pub fn to_material(
         vertex_color: texture.is_none() && vertex_colors,
         texture,
         checker: None,
+        wrap: None,
         ka: coef(a),
         kd: coef(dd),
         ks: coef(s),

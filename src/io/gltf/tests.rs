@@ -8,13 +8,13 @@ use glam::{Vec2, Vec3};
 use serde_json::{Value, json};
 
 /// Little-endian bytes of `f32`s.
-fn floats(v: &[f32]) -> Vec<u8> {
+pub(super) fn floats(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
 /// A document with one buffer holding `positions` (VEC3 floats, accessor 0) and, when
 /// given, u16 `indices` (accessor 1); one mesh of one primitive, one node.
-fn doc(positions: &[f32], indices: Option<&[u16]>) -> (Value, Vec<u8>) {
+pub(super) fn doc(positions: &[f32], indices: Option<&[u16]>) -> (Value, Vec<u8>) {
     let mut bin = floats(positions);
     let pos_len = bin.len();
     let mut accessors = vec![json!({
@@ -44,7 +44,7 @@ fn doc(positions: &[f32], indices: Option<&[u16]>) -> (Value, Vec<u8>) {
 }
 
 /// `d` as a GLB file with `bin` as its binary chunk (buffer 0 has no uri).
-fn glb(d: &Value, bin: &[u8]) -> Vec<u8> {
+pub(super) fn glb(d: &Value, bin: &[u8]) -> Vec<u8> {
     let mut json = serde_json::to_vec(d).unwrap();
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
@@ -86,18 +86,18 @@ fn embedded(mut d: Value, bin: &[u8]) -> Vec<u8> {
     serde_json::to_vec(&d).unwrap()
 }
 
-fn parse(bytes: &[u8]) -> Result<(Model, Vec<String>)> {
+pub(super) fn parse(bytes: &[u8]) -> Result<(Model, Vec<String>)> {
     parse_with(bytes, Path::new("t.gltf"), &mut |name| {
         Err(Error::parse(Path::new(name), 0, "no files in tests"))
     })
 }
 
-fn err(bytes: &[u8]) -> String {
+pub(super) fn err(bytes: &[u8]) -> String {
     parse(bytes).unwrap_err().to_string()
 }
 
 const TRI: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-const SQUARE: [f32; 12] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+pub(super) const SQUARE: [f32; 12] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0];
 
 #[test]
 fn glb_and_data_uri_read_the_same_flat_mesh() {
@@ -173,8 +173,8 @@ fn attributes_are_read() {
     assert_eq!(mesh.colors.unwrap()[1], Vec3::Y);
 }
 
-/// baseColorFactor is `Od`; faces without a material have none; a texture that is an
-/// embedded image is not read (a warning), the factor is used.
+/// baseColorFactor is `Od`; faces without a material have none; a texture on a mesh
+/// without uv is not read (a warning), the factor is used.
 #[test]
 fn materials_map_base_colour() {
     let (mut d, bin) = doc(&SQUARE, Some(&[0, 1, 2, 0, 2, 3]));

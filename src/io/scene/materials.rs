@@ -40,16 +40,43 @@ impl Builder<'_> {
             (None, 0) => Some(Vec3::splat(DEFAULT_COLOR)),
             (c, _) => c.map(|c| nonneg3(c, &key("color"), path)).transpose()?,
         };
+        if m.wrap.is_some() && m.texture.is_none() && m.checker.is_none() {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "{}: applies to a texture or checker, and this material has neither",
+                    key("wrap")
+                ),
+            ));
+        }
+        let wrap = m.wrap.unwrap_or_default();
         let albedo = if m.vertex_color {
             Albedo::VertexColor
         } else if let Some(col) = color {
             Albedo::Color(col)
         } else if let Some(t) = &m.texture {
-            let found = search.resolve(t).map_err(refer)?;
-            match self.textures.iter().find(|(p, _)| *p == found) {
+            // An image file, or an image inside a glTF file (`model.glb#images[0]`).
+            let (found, image) = match crate::io::gltf::image_ref(t) {
+                Some((file, i)) => {
+                    let found = search.resolve(file).map_err(refer)?;
+                    let key = format!("{}#images[{i}]", found.display());
+                    (std::path::PathBuf::from(key), Some((found, i)))
+                }
+                None => (search.resolve(t).map_err(refer)?, None),
+            };
+            // One load per image and wrap mode.
+            match self
+                .textures
+                .iter()
+                .find(|(p, tex)| *p == found && tex.wrap == wrap)
+            {
                 Some((_, tex)) => Albedo::Texture(tex.clone()),
                 None => {
-                    let tex = Arc::new(load_texture(&found).map_err(refer)?);
+                    let tex = match image {
+                        Some((file, i)) => crate::io::gltf::load_image(&file, i),
+                        None => load_texture(&found),
+                    };
+                    let tex = Arc::new(tex.map_err(refer)?.with_wrap(wrap));
                     self.textures.push((found, tex.clone()));
                     Albedo::Texture(tex)
                 }
@@ -63,12 +90,15 @@ impl Builder<'_> {
                 ));
             }
             let size = (ch.squares as usize * 16).min(4096);
-            Albedo::Texture(Arc::new(Texture::checker(
-                size,
-                ch.squares as usize,
-                nonneg3(ch.a, &key("checker.a"), path)?,
-                nonneg3(ch.b, &key("checker.b"), path)?,
-            )))
+            Albedo::Texture(Arc::new(
+                Texture::checker(
+                    size,
+                    ch.squares as usize,
+                    nonneg3(ch.a, &key("checker.a"), path)?,
+                    nonneg3(ch.b, &key("checker.b"), path)?,
+                )
+                .with_wrap(wrap),
+            ))
         };
         let ior = m.ior;
         if !(ior.is_finite() && ior > 0.0) {

@@ -2,6 +2,7 @@
 //! defaults and the caps a scene is checked against. Loaders use [`MaterialDesc`] and
 //! [`Coef`] to describe the materials their files bring; nothing here reads a file.
 
+use crate::texture::Wrap;
 use serde::{Deserialize, Serialize};
 
 /// Largest image accepted, in pixels (checked in u64 before anything is allocated):
@@ -289,6 +290,10 @@ pub struct MaterialDesc {
     /// `Od` from a procedural checker at the interpolated uv.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checker: Option<CheckerDesc>,
+    /// How the `texture` or `checker` continues outside uv `[0, 1]`: `"repeat"` (the
+    /// default), `"mirrored_repeat"` or `"clamp_to_edge"`, for both axes or as `[u, v]`.
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "wrap_modes")]
+    pub wrap: Option<[Wrap; 2]>,
     /// Ambient coefficient: a number (the same in every channel) or `[r, g, b]` (default 0.3).
     #[serde(default = "default_ka")]
     pub ka: Coef,
@@ -317,6 +322,61 @@ pub struct MaterialDesc {
     /// Whether `ke` also lights the scene through point lights (default true).
     #[serde(default = "default_true", skip_serializing_if = "is_true")]
     pub lamp: bool,
+}
+
+/// A [`Wrap`] mode by its name in a scene (glTF's sampler names, lower case).
+pub fn wrap_name(w: Wrap) -> &'static str {
+    match w {
+        Wrap::Repeat => "repeat",
+        Wrap::MirroredRepeat => "mirrored_repeat",
+        Wrap::Clamp => "clamp_to_edge",
+    }
+}
+
+/// `wrap = "mode"` (both axes) or `wrap = ["u mode", "v mode"]`; written back the same way.
+mod wrap_modes {
+    use super::{Wrap, wrap_name};
+    use serde::de::{Deserialize, Deserializer, Error};
+    use serde::{Serialize, Serializer};
+
+    const MODES: [Wrap; 3] = [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::Clamp];
+
+    fn mode<E: Error>(name: &str) -> Result<Wrap, E> {
+        MODES
+            .into_iter()
+            .find(|&w| wrap_name(w) == name)
+            .ok_or_else(|| {
+                E::custom(format!(
+                    "unknown wrap mode '{name}': expected repeat, mirrored_repeat or clamp_to_edge"
+                ))
+            })
+    }
+
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Given {
+        Both(String),
+        Each(Vec<String>),
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[Wrap; 2]>, D::Error> {
+        let given = Option::<Given>::deserialize(d)
+            .map_err(|_| D::Error::custom("wrap: expected a mode name or [u, v] mode names"))?;
+        match given {
+            None => Ok(None),
+            Some(Given::Both(m)) => Ok(Some([mode(&m)?; 2])),
+            Some(Given::Each(v)) if v.len() == 2 => Ok(Some([mode(&v[0])?, mode(&v[1])?])),
+            Some(Given::Each(v)) => Err(D::Error::invalid_length(v.len(), &"[u, v]: 2 modes")),
+        }
+    }
+
+    pub fn serialize<S: Serializer>(w: &Option<[Wrap; 2]>, s: S) -> Result<S::Ok, S::Error> {
+        match w {
+            Some([u, v]) if u == v => wrap_name(*u).serialize(s),
+            Some([u, v]) => [wrap_name(*u), wrap_name(*v)].serialize(s),
+            None => s.serialize_none(),
+        }
+    }
 }
 
 fn default_ior() -> f32 {
@@ -512,6 +572,7 @@ pub fn default_material(vertex_colors: bool) -> MaterialDesc {
         vertex_color: vertex_colors,
         texture: None,
         checker: None,
+        wrap: None,
         ka: default_ka(),
         kd: default_kd(),
         ks: default_ks(),
