@@ -34,8 +34,8 @@ pub fn intersect_hybrid8(
 
 /// Lanes of `active` whose ray hits anything with `tnear < t < tfar`: the 8 rays down the
 /// wide tree together, each alone once few remain (`wide8`; equals `occluded8` and
-/// `occluded1`). At 1.3M triangles 1.2x as fast on the bench's shadow rays as down the
-/// binary tree with the same switch, level on the kitten (docs/engines.md).
+/// `occluded1`). At 1.3M triangles 1.2-1.3x as fast on the bench's shadow rays as down the
+/// binary tree, the kitten level to 1.03x (docs/engines.md).
 pub fn occluded_hybrid8(accel: &Accel, rays: &RayPacket8, active: M32x8, cull: bool) -> M32x8 {
     super::wide8::occluded_wide8(accel, rays, active, cull)
 }

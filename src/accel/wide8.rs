@@ -27,7 +27,7 @@ use crate::simd::{self, F32x8, M32x8, Vec3x8};
 /// A node reached by at most this many lanes (or a leaf met by at most this many) is left to
 /// each lane alone. Measured on the bench workloads (docs/engines.md, "8 rays down the
 /// wide tree").
-pub const SWITCH_WIDE8: u32 = 2;
+pub const SWITCH_WIDE8: u32 = 3;
 
 /// What the child box tests of a packet need, made once per packet.
 struct Boxes {
