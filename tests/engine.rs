@@ -153,6 +153,59 @@ fn every_engine_is_intersect1_on_random_rays() {
     }
 }
 
+/// Rays aimed at the kitten's vertices, where a hit is decided in f64 and every kernel takes
+/// the f64 plane distance: every engine returns `intersect1`'s hit. Among them the ray that
+/// once split the trees: through the vertex that triangles 16404 and 4456 share, where 4456's
+/// f32 plane distance (4e-6 short) put its hit point before its box, so the wide tree, which
+/// tests 4456 beside triangles the ray does meet, returned it while the binary tree had culled
+/// it (the f64 contract: 16404 at 0.99999989, 4456 at 1.00000056).
+#[test]
+fn every_engine_is_intersect1_on_rays_through_vertices() {
+    let (mesh, accel) = kitten();
+    let (lo, hi) = mesh.bounds().unwrap();
+    let mut s = 7u64;
+    let mut rays = vec![Ray::new(
+        Vec3::new(0.94442177, -1.046991, 1.2499499),
+        Vec3::new(-0.75752777, 0.978368, -1.5972029),
+        0.0,
+        f32::INFINITY,
+    )];
+    for v in mesh.positions.iter().step_by(3) {
+        let u = [0; 3].map(|_| whitted::bench::rng_unit(&mut s) as f32);
+        let o = lo + (hi - lo) * Vec3::from(u) * 3.0 - (hi - lo);
+        rays.push(Ray::new(o, *v - o, 0.0, f32::INFINITY));
+    }
+    let bits = |h: Option<whitted::ray::Hit>| {
+        h.map(|h| (h.tri, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+    };
+    assert_eq!(
+        intersect1(&accel, &rays[0], false).map(|h| h.tri),
+        Some(16404)
+    );
+    for cull in [false, true] {
+        let want: Vec<_> = rays
+            .iter()
+            .map(|r| bits(intersect1(&accel, r, cull)))
+            .collect();
+        for e in Engine::ALL {
+            let got: Vec<_> = whitted::trace::trace_rays(&accel, &rays, e, cull)
+                .into_iter()
+                .map(bits)
+                .collect();
+            let bad = got.iter().zip(&want).position(|(g, w)| g != w);
+            assert!(
+                bad.is_none(),
+                "{} cull {cull}: ray {:?}",
+                e.name(),
+                bad.map(|i| rays[i])
+            );
+            let got: Vec<_> = whitted::trace::occluded_rays(&accel, &rays, e, cull);
+            let want_occ: Vec<_> = want.iter().map(Option::is_some).collect();
+            assert!(got == want_occ, "{} occluded, cull {cull}", e.name());
+        }
+    }
+}
+
 /// Rays with a NaN or infinite origin or direction component, or NaN bounds, hit nothing:
 /// brute force over every triangle (no boxes) says so, and every engine, closest and any
 /// hit, answers so without walking (`Ray::traceable`), lanes beside them in the same

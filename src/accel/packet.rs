@@ -6,7 +6,7 @@
 
 use super::hand_off::hand_off;
 use super::robust::{BARY_SAFE, nearer8, safe_inv8};
-use super::scalar::inside_f64;
+use super::scalar::hit_f64;
 use super::tri_soa::Leaf;
 use super::wide::{LEAF_BIT, NO_ENTRY, TriBlock8, leaf_blocks};
 use super::{Accel, ORIGIN_LAST, SLAB_FAR_SCALE};
@@ -44,8 +44,9 @@ pub fn hit_triangle8(
         }
     }
     let t = (v0 - rays.o).dot(n) / dn;
-    // depth test: NaN fails both comparisons and so misses.
-    mask = mask & simd::gt(t, rays.tnear) & simd::lt(t, tfar);
+    // depth test, near side (NaN fails it and so misses); the far side for the clear lanes
+    // below, a near-edge lane's from its f64 distance (`hit_f64`, as `hit_triangle1`).
+    mask &= simd::gt(t, rays.tnear);
     if simd::none(mask) {
         return (mask, t, t, t);
     }
@@ -62,17 +63,25 @@ pub fn hit_triangle8(
     let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
     let near = simd::ge(b0, ns) & simd::ge(b1, ns) & simd::ge(b2, ns);
     let unsure = simd::and_not(mask & near, sure);
-    let mut hit = mask & sure;
+    let mut hit = mask & sure & simd::lt(t, tfar);
+    let mut t = t;
     if simd::any(unsure) {
         let bits = simd::bitmask(unsure);
         let i = leaf.slot(j);
+        let (tnear, far) = (simd::lanes(rays.tnear), simd::lanes(tfar));
+        let mut tl = simd::lanes(t);
         let mut resolved = 0;
         for lane in 0..simd::LANES {
-            if bits >> lane & 1 == 1 && inside_f64(accel, i, rays.o.lane(lane), rays.d.lane(lane)) {
-                resolved |= 1 << lane;
+            if bits >> lane & 1 == 1 {
+                let (o, d) = (rays.o.lane(lane), rays.d.lane(lane));
+                if let Some(t64) = hit_f64(accel, i, o, d, tnear[lane], far[lane]) {
+                    resolved |= 1 << lane;
+                    tl[lane] = t64;
+                }
             }
         }
         hit |= simd::mask_from_bits(resolved);
+        t = simd::from_lanes(tl);
     }
     (hit, t, b1, b2)
 }

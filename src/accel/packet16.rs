@@ -17,7 +17,7 @@
 use super::hybrid8::{intersect_hybrid8, occluded_hybrid8};
 use super::packet::{intersect8, occluded8};
 use super::robust::{BARY_SAFE, nearer};
-use super::scalar::inside_f64;
+use super::scalar::hit_f64;
 use super::stack::{STACK, Stack, grow_stack};
 use super::tri_soa::Leaf;
 use super::wide::NO_ENTRY;
@@ -204,9 +204,10 @@ macro_rules! hit_triangle16 {
                 }
             }
             let t = _mm512_div_ps(dot(sub3(v0, r.o), n), dn);
-            // depth test: NaN fails both comparisons and so misses.
+            // depth test, near side (NaN fails it and so misses); the far side for the
+            // clear lanes below, a near-edge lane's from its f64 distance (`hit_f64`, as
+            // `hit_triangle1`).
             mask = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(mask, t, r.tnear);
-            mask = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(mask, t, tfar);
             if mask == 0 {
                 break 'tri (0, t, t, t);
             }
@@ -234,14 +235,22 @@ macro_rules! hit_triangle16 {
             let ge = |m: u16, a: __m512, b: __m512| _mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(m, a, b);
             let sure = ge(ge(ge(mask, b0, s), b1, s), b2, s);
             let near = ge(ge(ge(mask, b0, ns), b1, ns), b2, ns);
-            let mut hit = sure;
+            let mut hit = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(sure, t, tfar);
             let mut unsure = near & !sure;
-            while unsure != 0 {
-                let lane = unsure.trailing_zeros() as usize;
-                unsure &= unsure - 1;
-                if inside_f64(accel, leaf.slot(j), r.o1(lane), r.d1(lane)) {
-                    hit |= 1 << lane;
+            let mut t = t;
+            if unsure != 0 {
+                let (tn, tf) = (lanes16(r.tnear), lanes16(tfar));
+                let mut tl = lanes16(t);
+                while unsure != 0 {
+                    let lane = unsure.trailing_zeros() as usize;
+                    unsure &= unsure - 1;
+                    let (o, d) = (r.o1(lane), r.d1(lane));
+                    if let Some(t64) = hit_f64(accel, leaf.slot(j), o, d, tn[lane], tf[lane]) {
+                        hit |= 1 << lane;
+                        tl[lane] = t64;
+                    }
                 }
+                t = bytemuck::cast(tl);
             }
             (hit, t, b1, b2)
         }

@@ -67,8 +67,11 @@ pub fn hit_triangle1(
         return None;
     }
     let t = dot(sub(v0, o), n) / dn;
-    // depth test: NaN fails both comparisons and so misses.
-    if !(t > tnear && t < tfar) {
+    // depth test, near side: NaN fails the comparison and so misses. The far side waits for
+    // the barycentrics: a hit near an edge takes its distance from f64 (below), and whether
+    // a triangle is a hit must not hang on the limit a walk has reached, or two walks that
+    // meet triangles in different orders could return different ones.
+    if !(t > tnear) {
         return None;
     }
     // barycentric: q = p + t d; each weight is the signed area of the sub-triangle opposite
@@ -85,12 +88,46 @@ pub fn hit_triangle1(
     // BARY_SAFE / |cos(d, n)|.
     let s = BARY_SAFE * (ray.dlen * tri.n_len[i] / dn.abs());
     if b0 >= s && b1 >= s && b2 >= s {
-        return Some((t, b1, b2));
+        return (t < tfar).then_some((t, b1, b2));
     }
     if b0 < -s || b1 < -s || b2 < -s || !(b0 >= -s && b1 >= -s && b2 >= -s) {
         return None;
     }
-    inside_f64(accel, i, o, d).then_some((t, b1, b2))
+    hit_f64(accel, i, o, d, tnear, tfar).map(|t| (t, b1, b2))
+}
+
+/// The near-edge decision of every kernel: whether the ray passes through triangle `i`
+/// ([`inside_f64`]) and, if so, its distance from the plane in f64, rounded once to f32, when
+/// that lies within `(tnear, tfar)`. Near an edge or a vertex the f32 distance can be far
+/// off (a small triangle nearly edge-on to the ray: on the kitten 4e-6 short of the true
+/// distance), which put the hit point outside the triangle's box: a walk that had culled
+/// that box found another triangle than a walk that had not. The f64 distance puts the
+/// point where the ray meets the plane, within the triangle's padded box.
+pub fn hit_f64(
+    accel: &Accel,
+    i: usize,
+    o: [f32; 3],
+    d: [f32; 3],
+    tnear: f32,
+    tfar: f32,
+) -> Option<f32> {
+    if !inside_f64(accel, i, o, d) {
+        return None;
+    }
+    let tri = &accel.tris;
+    let f = |v: [f32; 3]| [0, 1, 2].map(|k| v[k] as f64 - o[k] as f64);
+    let (a, b, c) = (f(tri.v0(i)), f(tri.v1(i)), f(tri.v2(i)));
+    let e1 = [0, 1, 2].map(|k| b[k] - a[k]);
+    let e2 = [0, 1, 2].map(|k| c[k] - a[k]);
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    // (a zero-area triangle gives 0 / 0 = NaN, which fails both comparisons)
+    let t = (dot(a, n) / dot(d.map(f64::from), n)) as f32;
+    (t > tnear && t < tfar).then_some(t)
 }
 
 /// Whether the ray passes through the triangle, from the signs of the three edge functions

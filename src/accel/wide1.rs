@@ -14,7 +14,7 @@ mod interleave;
 mod walk;
 
 use super::robust::{BARY_SAFE, nearer};
-use super::scalar::inside_f64;
+use super::scalar::hit_f64;
 use super::stack::{STACK, grow_stack};
 use super::wide::{Bvh8, Node8, TriBlock8};
 use super::{Accel, SLAB_FAR_SCALE, safe_inv};
@@ -105,12 +105,14 @@ pub fn hit_block1<const ANY_HIT: bool>(
         mask = simd::and_not(mask, simd::ge(dn, simd::splat(0.0)));
     }
     let t = (b.v0 - r.o).dot(b.n) / dn;
-    // depth test: NaN fails both comparisons and so misses. No early exit when every lane
-    // fails it: that branch went either way (at 1.3M triangles 1.58 of an incoherent ray's
-    // 3.52 blocks fail it in every lane), and its mispredictions cost more than the
-    // barycentric lanes; without it the one branch left (any hit?) is nearly always "no", so
-    // the walk runs on speculatively while the block's lines arrive.
-    mask = mask & simd::gt(t, simd::splat(r.tnear)) & simd::lt(t, simd::splat(tfar));
+    // depth test, near side (NaN fails it and so misses); the far side for the clear lanes
+    // below, a near-edge lane's from its f64 distance (`hit_f64`, as `hit_triangle1`). No
+    // early exit when every lane fails: that branch went either way (at 1.3M triangles 1.58
+    // of an incoherent ray's 3.52 blocks fail the depth test in every lane), and its
+    // mispredictions cost more than the barycentric lanes; without it the one branch left
+    // (any hit?) is nearly always "no", so the walk runs on speculatively while the block's
+    // lines arrive.
+    mask &= simd::gt(t, simd::splat(r.tnear));
     // barycentric: signed sub-triangle areas over the whole, as linear forms of w = q - v0.
     let q = r.o + r.d * t;
     let w = q - b.v0;
@@ -125,7 +127,7 @@ pub fn hit_block1<const ANY_HIT: bool>(
     let ns = -s;
     let sure = simd::ge(b0, s) & simd::ge(b1, s) & simd::ge(b2, s);
     let near = simd::ge(b0, ns) & simd::ge(b1, ns) & simd::ge(b2, ns);
-    let mut bits = simd::bitmask(mask & sure);
+    let mut bits = simd::bitmask(mask & sure & simd::lt(t, simd::splat(tfar)));
     let mut unsure = simd::bitmask(simd::and_not(mask & near, sure));
     if bits | unsure == 0 {
         return None;
@@ -140,15 +142,16 @@ pub fn hit_block1<const ANY_HIT: bool>(
             b2: simd::lanes(b2)[lane],
         });
     }
+    let (mut t, b1, b2) = (simd::lanes(t), simd::lanes(b1), simd::lanes(b2));
     while unsure != 0 {
         let lane = unsure.trailing_zeros() as usize;
         unsure &= unsure - 1;
-        if inside_f64(accel, b.slot[lane] as usize, r.o1, r.d1) {
+        if let Some(t64) = hit_f64(accel, b.slot[lane] as usize, r.o1, r.d1, r.tnear, tfar) {
             bits |= 1 << lane;
+            t[lane] = t64;
         }
     }
     // record hit: the smallest (t, triangle index) of the lanes that hit.
-    let (t, b1, b2) = (simd::lanes(t), simd::lanes(b1), simd::lanes(b2));
     let mut best: Option<Hit> = None;
     while bits != 0 {
         let lane = bits.trailing_zeros() as usize;
