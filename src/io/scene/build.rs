@@ -102,8 +102,23 @@ fn build_scene_at(
         objects.push(b.object(i, d)?);
     }
 
-    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own.
-    lights.extend(crate::scene::emitter_lights(&objects, &b.materials));
+    let instances = super::instances::placements(file, path, &objects, &b.materials)?;
+
+    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own
+    // (of the objects drawn as they are: a placed mesh's lamps are not made lights).
+    let mut placed = vec![false; objects.len()];
+    for p in &instances {
+        placed[p.object] = true;
+    }
+    if instances.is_empty() {
+        lights.extend(crate::scene::emitter_lights(&objects, &b.materials));
+    } else {
+        let own: Vec<Object> = (objects.iter().zip(&placed))
+            .filter(|(_, p)| !**p)
+            .map(|(o, _)| o.clone())
+            .collect();
+        lights.extend(crate::scene::emitter_lights(&own, &b.materials));
+    }
 
     let scene = Scene {
         width,
@@ -116,6 +131,7 @@ fn build_scene_at(
         objects,
         cull_backfaces: r.cull_backfaces,
         depth: r.depth,
+        instances,
     };
     Ok((scene, b.warnings))
 }
