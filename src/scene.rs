@@ -182,6 +182,12 @@ impl Scene {
             .sum::<usize>()
     }
 
+    /// Triangles the scene stores: of every object once, however often it is placed (what
+    /// memory grows with).
+    pub fn stored_triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
+    }
+
     /// Per object, whether a placement names it (then it is drawn only where placed).
     pub fn placed_objects(&self) -> Vec<bool> {
         let mut placed = vec![false; self.objects.len()];

@@ -206,3 +206,62 @@ fn bad_instances_are_refused_with_the_file_and_line() {
         assert!(e.starts_with(&format!("field.toml:{line}:")), "{e}");
     }
 }
+
+/// A field of `n x n` kittens as a scene made in code (the scene file of
+/// `examples/kitten_field.rs` without its text): one kitten object, `n * n` placements.
+fn field(n: u32) -> Scene {
+    let mut scene = build(FIELD).unwrap();
+    let half = 1.5 * n as f32;
+    scene.width = 1920;
+    scene.height = 1080;
+    scene.view.eye = Vec3::new(half * 1.1, half * 0.6 + 2.0, half * 1.1);
+    scene.view.look_at = Vec3::new(0.0, -1.0, 0.0);
+    scene.objects[1].mesh = whitted::scene::shapes::quad(
+        Vec3::new(0.0, -1.1, 0.0),
+        Vec3::new(0.0, 0.0, half + 2.0),
+        Vec3::new(half + 2.0, 0.0, 0.0),
+    );
+    scene.instances = (0..n * n)
+        .map(|k| {
+            let (i, j) = ((k / n) as f32, (k % n) as f32);
+            Placement {
+                object: 0,
+                to_world: Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(0.8 + 0.4 * ((k * 7919) % 100) as f32 / 100.0),
+                    Quat::from_rotation_y(k as f32),
+                    Vec3::new(3.0 * i - half + 1.5, 0.0, 3.0 * j - half + 1.5),
+                ),
+                material: None,
+            }
+        })
+        .collect();
+    scene
+}
+
+/// The scale targets (README, "Instances"), run with the peak memory measured:
+///
+///     cargo test --release --test instances -- --ignored --nocapture million
+///     /usr/bin/time -v target/release/deps/instances-* --ignored --nocapture million
+#[test]
+#[ignore = "minutes and up to 2 GB: run by hand"]
+fn a_million_kittens_render_at_1080p() {
+    for n in [100, 1000] {
+        let start = std::time::Instant::now();
+        let world = World::new(field(n));
+        let built = start.elapsed();
+        let i = world.instanced.as_ref().unwrap();
+        assert_eq!(i.tracer.instances.len(), (n * n) as usize + 1);
+        let (image, stats) = render(&world, &Settings::default(), &|_| ());
+        let lit = image.pixels.iter().filter(|p| p.x > p.z).count();
+        println!(
+            "{} kittens ({} triangles): built in {:.2} s, {} bytes of trees, rendered 1920x1080 in {:.2} s ({} rays); {lit} orange pixels",
+            n * n,
+            i.tracer.triangles,
+            built.as_secs_f64(),
+            i.tracer.bytes(),
+            stats.time.as_secs_f64(),
+            stats.rays.total()
+        );
+        assert!(lit > 100_000, "{lit} kitten pixels");
+    }
+}
