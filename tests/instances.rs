@@ -265,3 +265,31 @@ fn a_million_kittens_render_at_1080p() {
         assert!(lit > 100_000, "{lit} kitten pixels");
     }
 }
+
+#[test]
+fn info_lists_instances() {
+    let path = common::scratch("instances", "field.toml");
+    let dir = common::assets();
+    std::fs::write(
+        &path,
+        FIELD.replace(
+            "meshes/kitten.m",
+            &dir.join("meshes/kitten.m").to_string_lossy(),
+        ),
+    )
+    .unwrap();
+    let json = whitted::info::run(&path, true).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["instances"], 2);
+    assert_eq!(v["objects"][0]["instances"], 2);
+    assert!(v["objects"][1].get("instances").is_none());
+    let list = v["instance_list"].as_array().unwrap();
+    assert_eq!(list[1]["mesh"], "kitten");
+    assert_eq!(list[1]["material"], "blue");
+    assert_eq!(list[1]["matrix"][0][3], 2.0);
+    let kitten = v["objects"][0]["triangles"].as_u64().unwrap();
+    assert_eq!(v["triangles"].as_u64().unwrap(), 2 * kitten + 2);
+    assert_eq!(v["stored_triangles"].as_u64().unwrap(), kitten + 2);
+    let text = whitted::info::run(&path, false).unwrap();
+    assert!(text.contains("instances: 2\n"), "{text}");
+}
