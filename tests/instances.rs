@@ -293,3 +293,27 @@ fn info_lists_instances() {
     let text = whitted::info::run(&path, false).unwrap();
     assert!(text.contains("instances: 2\n"), "{text}");
 }
+
+#[test]
+fn placed_lamps_are_named_in_a_warning() {
+    use whitted::io::scene::{SceneFile, SearchPath, build_scene};
+    let path = std::path::Path::new("field.toml");
+    let text = FIELD.replacen(
+        "color = [0.9, 0.5, 0.2]",
+        "color = [0.9, 0.5, 0.2]\nke = 1",
+        1,
+    );
+    let file = SceneFile::parse(&text, path).unwrap();
+    let search = SearchPath {
+        dirs: vec![common::assets()],
+    };
+    let (scene, warnings) = build_scene(&file, path, &search).unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("'kitten'") && w.contains("light nothing")),
+        "{warnings:?}"
+    );
+    // the one light of the file, none made of the placed kitten's faces
+    assert_eq!(scene.lights.len(), 1);
+}

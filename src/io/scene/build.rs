@@ -113,6 +113,19 @@ fn build_scene_at(
     if instances.is_empty() {
         lights.extend(crate::scene::emitter_lights(&objects, &b.materials));
     } else {
+        for (o, _) in objects.iter().zip(&placed).filter(|(_, p)| **p) {
+            let lamp = |m: usize| b.materials[m].lamp && b.materials[m].emits();
+            let emits = match &o.face_materials {
+                Some(f) => f.iter().any(|&m| lamp(m as usize)),
+                None => lamp(o.material),
+            };
+            if emits {
+                b.warnings.push(format!(
+                    "mesh '{}' is placed by [[instance]]: its emitting faces show `ke` but light nothing (lamps are made lights only on meshes drawn as they are)",
+                    o.name
+                ));
+            }
+        }
         let own: Vec<Object> = (objects.iter().zip(&placed))
             .filter(|(_, p)| !**p)
             .map(|(o, _)| o.clone())
