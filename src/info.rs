@@ -244,18 +244,51 @@ pub fn scene_file_info(file: &SceneFile, path: &Path, dir: Option<&Path>) -> Res
             json!({"cubemap": file.background.cubemap, "size": cube.faces[0].width})
         }
     };
+    let mut placements = vec![0usize; scene.objects.len()];
+    for p in &scene.instances {
+        placements[p.object] += 1;
+    }
     let objects: Vec<Value> = scene
         .objects
         .iter()
-        .map(|o| {
-            json!({
+        .zip(&placements)
+        .map(|(o, &placed)| {
+            let mut v = json!({
                 "name": o.name,
                 "material": scene.materials.get(o.material).map(|m| m.name.as_str()),
                 "vertices": o.mesh.positions.len(),
                 "triangles": o.mesh.triangles.len(),
+            });
+            if placed > 0 {
+                v["instances"] = json!(placed);
+            }
+            v
+        })
+        .collect();
+    // the first placements, each as its mesh, material and 3x4 matrix (rows)
+    let listed: Vec<Value> = scene
+        .instances
+        .iter()
+        .take(MAX_LISTED_INSTANCES)
+        .map(|p| {
+            let m = p.to_world.matrix3;
+            let t = p.to_world.translation;
+            let row = |r: usize| [m.x_axis[r], m.y_axis[r], m.z_axis[r], t[r]].map(short);
+            json!({
+                "mesh": scene.objects[p.object].name,
+                "material": p.material.map(|m| scene.materials[m].name.as_str()),
+                "matrix": [row(0), row(1), row(2)],
             })
         })
         .collect();
+    let mut instance_fields = Vec::new();
+    if !scene.instances.is_empty() {
+        instance_fields = vec![
+            ("instances", json!(scene.instances.len())),
+            ("instance_list", json!(listed)),
+            ("stored_triangles", json!(scene.stored_triangle_count())),
+        ];
+    }
     let v = &scene.view;
     Ok(Info {
         fields: vec![
@@ -282,10 +315,17 @@ pub fn scene_file_info(file: &SceneFile, path: &Path, dir: Option<&Path>) -> Res
             ),
             ("objects", json!(objects)),
             ("triangles", json!(scene.triangle_count())),
-        ],
+        ]
+        .into_iter()
+        .chain(instance_fields)
+        .collect(),
         warnings,
     })
 }
+
+/// Placements `whitted info` lists one by one (a scene may have millions); `instances` counts
+/// them all.
+pub const MAX_LISTED_INSTANCES: usize = 100;
 
 /// `whitted info` as a library call: the text (or JSON) to print, or the one-line error.
 pub fn run(path: &Path, as_json: bool) -> Result<String> {

@@ -32,6 +32,7 @@ pub mod engine;
 pub mod error;
 pub mod image;
 pub mod info;
+pub mod instance;
 pub mod io;
 pub mod mesh;
 pub mod packet;

@@ -508,7 +508,7 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
     let load_start = std::time::Instant::now();
     let (mut scene, warnings) = build_scene(&file, &path, &SearchPath::for_scene(dir.as_deref()))
         .map_err(|e| whitted::io::scene::name_overrides(e, &args.define))?;
-    check_subdivided_triangles(args.subdivide, scene.triangle_count() as u64)?;
+    check_subdivided_triangles(args.subdivide, scene.stored_triangle_count() as u64)?;
     for o in &mut scene.objects {
         o.mesh = o.mesh.subdivide(args.subdivide);
     }
@@ -588,8 +588,8 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         eprintln!(
             "{what} in {:.2} s (BVH {:.1} ms, {} triangles): {} rays (primary {}, shadow {}, reflection {}, refraction {}), {:.2} Mrays/s -> {}",
             secs,
-            world.accel.build_time.as_secs_f64() * 1e3,
-            world.accel.tris.len(),
+            world.build_time().as_secs_f64() * 1e3,
+            world.triangles(),
             total,
             r.primary.load(Ordering::Relaxed),
             r.shadow.load(Ordering::Relaxed),
@@ -649,12 +649,26 @@ fn print_stats(
         load(&r.refraction),
     );
     println!("engine            {engine:?}");
-    println!(
-        "BVH build         {:.1} ms ({} triangles, depth {})",
-        world.accel.build_time.as_secs_f64() * 1e3,
-        world.accel.tris.len(),
-        world.accel.depth
-    );
+    match &world.instanced {
+        None => println!(
+            "BVH build         {:.1} ms ({} triangles, depth {})",
+            world.accel.build_time.as_secs_f64() * 1e3,
+            world.accel.tris.len(),
+            world.accel.depth
+        ),
+        Some(i) => println!(
+            "BVH build         {:.1} ms ({} triangles in {} instances of {} meshes, {} stored; top level {} nodes)",
+            i.build_time.as_secs_f64() * 1e3,
+            i.tracer.triangles,
+            i.tracer.instances.len(),
+            i.tracer.meshes.len(),
+            i.geometries
+                .iter()
+                .map(|g| g.triangles.len())
+                .sum::<usize>(),
+            i.tracer.top_nodes()
+        ),
+    }
     println!(
         "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
     );

@@ -146,6 +146,21 @@ pub struct Scene {
     pub cull_backfaces: bool,
     /// Reflection / refraction bounces.
     pub depth: u32,
+    /// Placements of objects (`[[instance]]`, glTF meshes used more than once). An object
+    /// that any placement names is drawn only where placements put it; the others are drawn
+    /// as they are. Empty: every object as it is, flattened (no top level).
+    pub instances: Vec<Placement>,
+}
+
+/// One placement of an object: where (object to world) and, optionally, in which material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    /// Index of the object placed.
+    pub object: usize,
+    /// Object space to world space (invertible and finite: the readers check).
+    pub to_world: glam::Affine3A,
+    /// A scene material for every triangle of this placement, instead of the object's.
+    pub material: Option<usize>,
 }
 
 impl Scene {
@@ -155,15 +170,45 @@ impl Scene {
         Camera::new(v.eye, v.look_at, v.up, v.vfov, self.width, self.height)
     }
 
-    /// Triangles of all objects.
+    /// Triangles the scene draws: of the objects drawn as they are, and of every placement.
     pub fn triangle_count(&self) -> usize {
+        let placed = self.placed_objects();
+        let own: usize = (self.objects.iter().enumerate())
+            .filter(|(i, _)| !placed[*i])
+            .map(|(_, o)| o.mesh.triangles.len())
+            .sum();
+        own + (self.instances.iter())
+            .map(|p| self.objects[p.object].mesh.triangles.len())
+            .sum::<usize>()
+    }
+
+    /// Triangles the scene stores: of every object once, however often it is placed (what
+    /// memory grows with).
+    pub fn stored_triangle_count(&self) -> usize {
         self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
     }
 
-    /// Flatten every object into one triangle list with per-vertex shading attributes.
+    /// Per object, whether a placement names it (then it is drawn only where placed).
+    pub fn placed_objects(&self) -> Vec<bool> {
+        let mut placed = vec![false; self.objects.len()];
+        for p in &self.instances {
+            placed[p.object] = true;
+        }
+        placed
+    }
+
+    /// Flatten every object into one triangle list with per-vertex shading attributes
+    /// (placements aside: see [`Scene::geometry_of`]).
     pub fn geometry(&self) -> Geometry {
+        self.geometry_of(0..self.objects.len())
+    }
+
+    /// Flatten the objects `which` (indices, in this order) into one triangle list, each
+    /// triangle's `tri_object` the object's index in the scene.
+    pub fn geometry_of(&self, which: impl IntoIterator<Item = usize>) -> Geometry {
         let mut g = Geometry::default();
-        for (oi, o) in self.objects.iter().enumerate() {
+        for oi in which {
+            let o = &self.objects[oi];
             let base = g.positions.len() as u32;
             let m = &o.mesh;
             g.positions.extend_from_slice(&m.positions);

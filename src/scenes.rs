@@ -116,6 +116,7 @@ fn base(depth: u32, cull: bool, background: BackgroundDesc) -> SceneFile {
         ],
         materials: vec![],
         meshes: vec![],
+        instances: Vec::new(),
         lines: Default::default(),
     }
 }

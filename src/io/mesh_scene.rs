@@ -123,6 +123,7 @@ pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile
             file: Some(file),
             ..Default::default()
         }],
+        instances: Vec::new(),
         lines: Default::default(),
     };
     Ok((scene, warnings))

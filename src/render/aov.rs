@@ -7,9 +7,9 @@ use crate::accel::intersect8;
 use crate::aov::{Aov, AovImages};
 use crate::image::PixelBounds;
 use crate::packet::{PacketShape, camera_packet};
-use crate::shade::surface;
+use crate::shade::surface_in;
 use crate::simd::{self, LANES};
-use crate::world::World;
+use crate::world::{NOT_INSTANCED, World};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -50,7 +50,13 @@ pub fn capture_part(world: &World, aovs: &[Aov], part: PixelBounds) -> AovImages
     chunks.into_par_iter().for_each(|(y0, rows)| {
         for x0 in (px0..part.x1).step_by(4) {
             let (packet, active) = camera_packet(&cam, PacketShape::Block4x2, x0, y0, 0.5, 0.5);
-            let hits = intersect8(&world.accel, &packet, active, cull);
+            let (hits, insts) = match &world.instanced {
+                None => (
+                    intersect8(&world.accel, &packet, active, cull),
+                    [NOT_INSTANCED; LANES],
+                ),
+                Some(i) => (i.tracer).intersect_packet8(&packet, active, cull, Some(intersect8)),
+            };
             for i in (0..LANES).filter(|&i| simd::lane_set(active, i)) {
                 let (dx, dy) = PacketShape::Block4x2.offset(i);
                 let (x, y) = (x0 + dx, y0 + dy);
@@ -59,7 +65,7 @@ pub fn capture_part(world: &World, aovs: &[Aov], part: PixelBounds) -> AovImages
                 }
                 let Some(hit) = hits.lane(i) else { continue };
                 let ray = packet.lane(i);
-                let s = surface(world, &ray, &hit);
+                let s = surface_in(world, &ray, &hit, insts[i]);
                 let m = &world.scene.materials[s.material as usize];
                 // row of `y` within this chunk (the chunk starts at part row max(y0, part.y0))
                 let r = (y - y0.max(part.y0)) as usize;
@@ -67,7 +73,7 @@ pub fn capture_part(world: &World, aovs: &[Aov], part: PixelBounds) -> AovImages
                     albedo: s.od * m.kd,
                     normal: s.n,
                     depth: hit.t * ray.dir.length(),
-                    id: hit.tri,
+                    id: world.global_id(hit.tri, insts[i]),
                 };
             }
         }

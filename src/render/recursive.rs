@@ -1,7 +1,7 @@
-//! The scalar reference renderer: `trace1(ray, depth)` recursion over `intersect1` / `occluded1`.
+//! The scalar reference renderer: `trace1(ray, depth)` recursion over `intersect1` / `occluded1`
+//! (through instances when the scene has them: `World::intersect1`).
 
 use super::{MAX_SAMPLE_SECONDARY_RAYS, RenderStats, Settings, Terms, World, tile_end};
-use crate::accel::intersect1;
 use crate::ray::Ray;
 use crate::shade::{SecondaryKind, shade1};
 use glam::Vec3;
@@ -18,13 +18,13 @@ pub fn trace1(
     counts: &mut [u64; 4],
     budget: &mut Option<u32>,
 ) -> Vec3 {
-    let Some(hit) = intersect1(&world.accel, ray, world.scene.cull_backfaces) else {
+    let Some((hit, inst)) = world.intersect1(ray) else {
         return world.scene.background.sample(ray.dir);
     };
     if terms.white {
         return Vec3::ONE;
     }
-    let (mut color, secondaries) = shade1(world, terms, ray, &hit, depth, &mut counts[1]);
+    let (mut color, secondaries) = shade1(world, terms, ray, (&hit, inst), depth, &mut counts[1]);
     for s in secondaries.into_iter().flatten() {
         match budget {
             Some(0) | None => {

@@ -16,10 +16,11 @@ use crate::accel::{
 use crate::camera::Camera;
 use crate::packet::RayPacket8;
 use crate::packet::{HitPacket8, PacketShape, camera_packet};
-use crate::shade::{Shade8, shade8};
+use crate::shade::{Shade8, shade8_in};
 use crate::simd::M32x8;
 use crate::simd::{self, LANES, Vec3x8};
 use crate::trace::Engine;
+use crate::world::NOT_INSTANCED;
 use glam::Vec3;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -73,45 +74,112 @@ impl Kernel {
         }
     }
     /// Closest hits of packets `0..n` (`packet(p)` builds the `p`-th), handed to
-    /// `out(p, hits)` in order: the 16-ray kernels take two packets at a time, the others
-    /// one (their loop as before the 16-ray kernels: a loop over pairs cost `phong`'s camera
-    /// phase 9% and its shadow phase 4%). Kept out of line: inlined into the tile loop it
-    /// cost `refraction`'s shade phase 20% (code of the shading fell out of line).
+    /// `out(p, hits, instances)` in order: the 16-ray kernels take two packets at a time, the
+    /// others one (their loop as before the 16-ray kernels: a loop over pairs cost `phong`'s
+    /// camera phase 9% and its shadow phase 4%). Through instances when the world has them
+    /// (each lane's instance, else [`NOT_INSTANCED`]). Kept out of line: inlined into the
+    /// tile loop it cost `refraction`'s shade phase 20% (code of the shading fell out of
+    /// line).
     #[inline(never)]
     fn intersect_all(
         self,
-        accel: &Accel,
+        world: &World,
         n: usize,
         packet: impl Fn(usize) -> (RayPacket8, M32x8),
         cull: bool,
-        out: impl FnMut(usize, HitPacket8),
+        mut out: impl FnMut(usize, HitPacket8, [u32; LANES]),
     ) {
+        let accel = &world.accel;
         let two: Option<Pair16<HitPacket8>> = match self {
             Kernel::Packet16 => Some(intersect16),
             Kernel::Hybrid16 => Some(intersect_hybrid16),
             _ => None,
         };
+        if let Some(i) = &world.instanced {
+            let t = &i.tracer;
+            let one = |q: &RayPacket8, m| t.intersect_packet8(q, m, cull, self.bottom8());
+            let Some(two) = two else {
+                for p in 0..n {
+                    let (q, m) = packet(p);
+                    let (h, ids) = one(&q, m);
+                    out(p, h, ids);
+                }
+                return;
+            };
+            for p in (0..n).step_by(2) {
+                let a = packet(p);
+                if p + 1 < n {
+                    let b = packet(p + 1);
+                    let [(h0, i0), (h1, i1)] =
+                        t.intersect_pair16([&a.0, &b.0], [a.1, b.1], cull, two);
+                    out(p, h0, i0);
+                    out(p + 1, h1, i1);
+                } else {
+                    let (h, ids) = one(&a.0, a.1);
+                    out(p, h, ids);
+                }
+            }
+            return;
+        }
         let one = |q: &RayPacket8, m| self.intersect(accel, q, m, cull);
-        each_packet(accel, cull, n, packet, one, two, out);
+        each_packet(accel, cull, n, packet, one, two, |p, h| {
+            out(p, h, [NOT_INSTANCED; LANES])
+        });
     }
     /// Occluded lanes of packets `0..n`, handed to `out(p, occluded)` in order (as
     /// [`Kernel::intersect_all`]).
     #[inline(never)]
     fn occluded_all(
         self,
-        accel: &Accel,
+        world: &World,
         n: usize,
         packet: impl Fn(usize) -> (RayPacket8, M32x8),
         cull: bool,
         out: impl FnMut(usize, M32x8),
     ) {
+        let accel = &world.accel;
         let two: Option<Pair16<M32x8>> = match self {
             Kernel::Packet16 => Some(occluded16),
             Kernel::Hybrid16 => Some(occluded_hybrid16),
             _ => None,
         };
+        if let Some(i) = &world.instanced {
+            let t = &i.tracer;
+            let one = |q: &RayPacket8, m| t.occluded_packet8(q, m, cull, self.occluded8());
+            let mut out = out;
+            for p in (0..n).step_by(if two.is_some() { 2 } else { 1 }) {
+                let a = packet(p);
+                match two {
+                    Some(f) if p + 1 < n => {
+                        let b = packet(p + 1);
+                        let [r0, r1] = t.occluded_pair16([&a.0, &b.0], [a.1, b.1], cull, f);
+                        out(p, r0);
+                        out(p + 1, r1);
+                    }
+                    _ => out(p, one(&a.0, a.1)),
+                }
+            }
+            return;
+        }
         let one = |q: &RayPacket8, m| self.occluded(accel, q, m, cull);
         each_packet(accel, cull, n, packet, one, two, out);
+    }
+    /// The 8-ray closest-hit entry point each instance's lanes go through (`None`: `wide1`
+    /// lane by lane).
+    fn bottom8(self) -> Option<crate::instance::Bottom8> {
+        match self {
+            Kernel::Packet | Kernel::Packet16 => Some(intersect8),
+            Kernel::Wide => None,
+            Kernel::Hybrid | Kernel::Hybrid16 => Some(intersect_hybrid8),
+        }
+    }
+    /// [`Kernel::bottom8`]'s any-hit twin.
+    fn occluded8(self) -> Option<crate::instance::Occluded8> {
+        match self {
+            Kernel::Packet | Kernel::Packet16 => Some(occluded8),
+            Kernel::Wide => None,
+            Kernel::Hybrid | Kernel::Hybrid16 => Some(occluded_hybrid8),
+        }
     }
 }
 
@@ -231,6 +299,8 @@ pub struct Workspace {
     shadows: ShadowQueue,
     binning: BinScratch,
     hits: Vec<HitPacket8>,
+    /// Per hit packet, each lane's instance ([`NOT_INSTANCED`] in a flattened world).
+    insts: Vec<[u32; LANES]>,
     /// Entries of `rays` traced themselves (not twins), when some are twins.
     unique: Vec<u32>,
     /// Per entry of `rays`, the `next` entries of its reflection and refraction rays (kept
@@ -260,7 +330,14 @@ pub fn render_tile(
     let camera = world.scene.camera();
     let terms = Terms::of(settings.stage);
     let depth = settings.depth(&world.scene);
-    let kernels = Kernels::of(settings.engine);
+    let kernels = match (&world.instanced, settings.engine) {
+        // Through instances `auto` takes `wide1` for every queue: on the field of 10,000
+        // kittens (docs/instances.md) it rendered in 0.6x the time of the packet kernels,
+        // whose lanes part at the top level (each kitten covers a few pixels) and whose
+        // instance leaves then trace a few lanes at a time.
+        (Some(_), Engine::Auto) => Kernels::of(Engine::Wide),
+        (_, engine) => Kernels::of(engine),
+    };
     let (x1, y1) = tile_end(&camera, x0, y0);
     let Workspace {
         rays,
@@ -268,6 +345,7 @@ pub fn render_tile(
         shadows,
         binning,
         hits,
+        insts,
         unique,
         children,
         shadow_of,
@@ -298,7 +376,7 @@ pub fn render_tile(
             1 => kernels.secondary,
             _ => kernels.secondary_later,
         };
-        intersect_closest(world, kernel, rays, hits, unique);
+        intersect_closest(world, kernel, rays, (hits, insts), unique);
         counts[4] += rays.twins.count() as u64;
         phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
 
@@ -308,7 +386,7 @@ pub fn render_tile(
             world,
             terms,
             rays,
-            hits,
+            (hits, insts),
             accum,
             (shadows, shadow_of),
             (next, children),
@@ -418,27 +496,33 @@ fn intersect_closest(
     world: &World,
     kernel: Kernel,
     rays: &RayQueue,
-    out: &mut Vec<HitPacket8>,
+    (out, insts): (&mut Vec<HitPacket8>, &mut Vec<[u32; LANES]>),
     unique: &mut Vec<u32>,
 ) {
     let cull = world.scene.cull_backfaces;
     out.clear();
+    insts.clear();
     let n = rays.len().div_ceil(LANES);
     if rays.twins.count() == 0 {
         let packet = |p: usize| rays.packet(p * LANES);
-        kernel.intersect_all(&world.accel, n, packet, cull, |_, h| out.push(h));
+        kernel.intersect_all(world, n, packet, cull, |_, h, ids| {
+            out.push(h);
+            insts.push(ids);
+        });
         return;
     }
     out.resize(n, HitPacket8::none());
+    insts.resize(n, [NOT_INSTANCED; LANES]);
     rays.twins.originals(rays.len(), unique);
     let at = |j: u32| (j as usize / LANES, j as usize % LANES);
     let group = |p: usize| &unique[p * LANES..((p + 1) * LANES).min(unique.len())];
     let packet = |p: usize| RayPacket8::from_fn(|i| group(p).get(i).map(|&j| rays.ray(j as usize)));
     let groups = unique.len().div_ceil(LANES);
-    kernel.intersect_all(&world.accel, groups, packet, cull, |p, h| {
+    kernel.intersect_all(world, groups, packet, cull, |p, h, ids| {
         for (i, &j) in group(p).iter().enumerate() {
             let (q, lane) = at(j);
             out[q].set_lane(lane, h.lane(i));
+            insts[q][lane] = ids[i];
         }
     });
     // (an original comes before its twins, and may be a twin itself)
@@ -448,6 +532,7 @@ fn intersect_closest(
             let (p, lane) = at(t);
             let h = out[p].lane(lane);
             out[j / LANES].set_lane(j % LANES, h);
+            insts[j / LANES][j % LANES] = insts[p][lane];
         }
     }
 }
@@ -474,7 +559,7 @@ fn shade_hits(
     world: &World,
     terms: Terms,
     rays: &RayQueue,
-    hits: &[HitPacket8],
+    (hits, insts): (&[HitPacket8], &[[u32; LANES]]),
     accum: &mut [Vec3],
     (shadows, shadow_of): (&mut ShadowQueue, &mut Vec<u32>),
     (next, children): (&mut RayQueue, &mut Vec<[u32; 2]>),
@@ -509,7 +594,7 @@ fn shade_hits(
         }
         let (packet, _) = rays.packet(start);
         let depth = rays.depth_lanes(start);
-        shade8(world, terms, &packet, h, mask, depth, shaded);
+        shade8_in(world, terms, &packet, (h, &insts[p]), mask, depth, shaded);
         let s = &*shaded;
         add_lanes(accum, bits, pixel, &w.mul_elem(s.ambient));
         for (li, l) in s.lights.iter().enumerate() {
@@ -614,7 +699,7 @@ fn trace_shadow_rays(
         let packet =
             |p: usize| RayPacket8::from_fn(|i| group(p).get(i).map(|&j| shadows.ray(j as usize)));
         let groups = unique.len().div_ceil(LANES);
-        kernel.occluded_all(&world.accel, groups, packet, cull, |p, o| {
+        kernel.occluded_all(world, groups, packet, cull, |p, o| {
             let hit = simd::bitmask(o);
             for (i, &j) in group(p).iter().enumerate() {
                 occluded[j as usize] = hit >> i & 1 == 1;
@@ -633,7 +718,7 @@ fn trace_shadow_rays(
     }
     let n = shadows.len().div_ceil(LANES);
     let packet = |p: usize| shadows.packet(p * LANES);
-    kernel.occluded_all(&world.accel, n, packet, cull, |p, occluded| {
+    kernel.occluded_all(world, n, packet, cull, |p, occluded| {
         let start = p * LANES;
         let active = (1u32 << (shadows.len() - start).min(LANES)) - 1;
         let visible = active & !simd::bitmask(occluded);

@@ -5,12 +5,11 @@
 
 pub mod packet;
 
-pub use packet::{Shade8, shade8};
+pub use packet::{Shade8, shade8, shade8_in};
 
-use crate::accel::occluded1;
 use crate::ray::{Hit, Ray, offset_origin, reflect, refract};
 use crate::scene::{Albedo, Geometry, Material};
-use crate::world::{Terms, World};
+use crate::world::{NOT_INSTANCED, Terms, World};
 use glam::Vec3;
 
 /// Everything shading needs at a hit point.
@@ -52,23 +51,27 @@ pub enum SecondaryKind {
 
 /// Interpolate the hit: normal, colour, uv; flip normals on back faces.
 pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
-    let g = &world.geometry;
+    surface_in(world, ray, hit, NOT_INSTANCED)
+}
+
+/// [`surface`] of a hit on instance `inst` ([`NOT_INSTANCED`]: on the flattened geometry).
+pub fn surface_in(world: &World, ray: &Ray, hit: &Hit, inst: u32) -> Surface {
+    let (g, _) = world.shading(inst);
     let [i0, i1, i2] = g.triangles[hit.tri as usize].map(|i| i as usize);
     let (b1, b2) = (hit.b1, hit.b2);
     let b0 = 1.0 - b1 - b2;
     let q = ray.origin + hit.t * ray.dir;
-    let mut ng = g.face_normals[hit.tri as usize];
+    let ([n0, n1, n2], ng) = normals(world, inst, hit.tri);
+    let mut ng = ng;
     // shading normal: interpolated and normalised; the geometric normal if that vanishes.
-    let mut n = (b0 * g.normals[i0] + b1 * g.normals[i1] + b2 * g.normals[i2])
-        .try_normalize()
-        .unwrap_or(ng);
+    let mut n = (b0 * n0 + b1 * n1 + b2 * n2).try_normalize().unwrap_or(ng);
     // back face: flip Ng and N before shading.
     let back = ray.dir.dot(ng) > 0.0;
     if back {
         ng = -ng;
         n = -n;
     }
-    let material = triangle_material(world, hit.tri);
+    let material = triangle_material(world, hit.tri, inst);
     let m = &world.scene.materials[material as usize];
     Surface {
         q,
@@ -80,10 +83,36 @@ pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
     }
 }
 
-/// Index of the material of triangle `tri` (scene order).
+/// Index of the material of triangle `tri` of instance `inst` (its placement's material,
+/// else the triangle's own).
 #[inline]
-pub fn triangle_material(world: &World, tri: u32) -> u32 {
-    world.geometry.tri_material[tri as usize]
+pub fn triangle_material(world: &World, tri: u32, inst: u32) -> u32 {
+    match world.shading(inst) {
+        (_, Some((_, Some(m), _))) => m,
+        (g, _) => g.tri_material[tri as usize],
+    }
+}
+
+/// The vertex normals and the geometric normal of triangle `tri` of instance `inst`, in
+/// world space: through a placement, carried by the inverse transpose of its transform and
+/// normalised (each vertex normal as the flattened scene's would be), the geometric normal
+/// turned around by a mirroring placement (it is `cross(v1 - v0, v2 - v0)` of the placed
+/// corners).
+#[inline]
+pub fn normals(world: &World, inst: u32, tri: u32) -> ([Vec3; 3], Vec3) {
+    let (g, placed) = world.shading(inst);
+    let v = g.triangles[tri as usize].map(|i| g.normals[i as usize]);
+    let ng = g.face_normals[tri as usize];
+    match placed {
+        None => (v, ng),
+        Some((p, _, hand)) => {
+            let m = p.to_object.matrix3.transpose();
+            (
+                v.map(|n| (m * n).normalize_or_zero()),
+                (hand * (m * ng)).normalize_or_zero(),
+            )
+        }
+    }
 }
 
 /// `Od` at barycentric weights `b0 b1 b2` of the triangle with vertices `v`: the material's
@@ -241,19 +270,14 @@ pub fn shade1(
     world: &World,
     terms: Terms,
     ray: &Ray,
-    hit: &Hit,
+    (hit, inst): (&Hit, u32),
     depth: u32,
     shadow_rays: &mut u64,
 ) -> (Vec3, [Option<Secondary>; 2]) {
-    let s = surface(world, ray, hit);
-    let cull = world.scene.cull_backfaces;
+    let s = surface_in(world, ray, hit, inst);
     let color = direct1(world, terms, &s, ray.dir, |i| {
         *shadow_rays += 1;
-        !occluded1(
-            &world.accel,
-            &shadow_ray(&s, world.scene.lights[i].position, world.eps),
-            cull,
-        )
+        !world.occluded1(&shadow_ray(&s, world.scene.lights[i].position, world.eps))
     });
     (color, secondaries1(world, &s, ray.dir, depth))
 }

@@ -9,10 +9,10 @@
 //! offset origins. Shadow rays are not traced here: each lit lane and light becomes a
 //! shadow-queue entry carrying the contribution to add if the light is visible.
 
-use super::{albedo, phong_pow, powi_by_squaring, triangle_material, whole_exponent};
+use super::{albedo, normals, phong_pow, powi_by_squaring, triangle_material, whole_exponent};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::simd::{self, F32x8, LANES, M32x8, Vec3x8};
-use crate::world::{Terms, World};
+use crate::world::{NOT_INSTANCED, Terms, World};
 
 /// One light's share of a hit packet: the shadow rays and what they carry.
 #[derive(Clone, Copy, Debug, Default)]
@@ -76,21 +76,26 @@ struct Gathered {
     material: [u32; LANES],
 }
 
-fn gather(world: &World, hits: &HitPacket8, bits: u32, b: [[f32; LANES]; 3]) -> Gathered {
-    let g = &world.geometry;
+fn gather(
+    world: &World,
+    hits: &HitPacket8,
+    insts: &[u32; LANES],
+    bits: u32,
+    b: [[f32; LANES]; 3],
+) -> Gathered {
     let tri = simd::u32_lanes(hits.tri);
     let mut out = Gathered::default();
     for i in (0..LANES).filter(|&i| bits >> i & 1 == 1) {
         let t = tri[i];
+        let (g, _) = world.shading(insts[i]);
         let v = g.triangles[t as usize].map(|x| x as usize);
-        for (vk, &vi) in v.iter().enumerate() {
-            let n = g.normals[vi];
+        let (vn, ng) = normals(world, insts[i], t);
+        for (vk, n) in vn.iter().enumerate() {
             out.vn[vk][0][i] = n.x;
             out.vn[vk][1][i] = n.y;
             out.vn[vk][2][i] = n.z;
         }
-        let ng = g.face_normals[t as usize];
-        let material = triangle_material(world, t);
+        let material = triangle_material(world, t, insts[i]);
         let m = &world.scene.materials[material as usize];
         let od = albedo(g, m, v, b[0][i], b[1][i], b[2][i]);
         for a in 0..3 {
@@ -128,6 +133,28 @@ pub fn shade8(
     depth: [u32; LANES],
     out: &mut Shade8,
 ) {
+    shade8_in(
+        world,
+        terms,
+        rays,
+        (hits, &[NOT_INSTANCED; LANES]),
+        mask,
+        depth,
+        out,
+    )
+}
+
+/// [`shade8`] of hits through instances: `insts[i]` is lane `i`'s instance
+/// ([`NOT_INSTANCED`]: on the flattened geometry).
+pub fn shade8_in(
+    world: &World,
+    terms: Terms,
+    rays: &RayPacket8,
+    (hits, insts): (&HitPacket8, &[u32; LANES]),
+    mask: M32x8,
+    depth: [u32; LANES],
+    out: &mut Shade8,
+) {
     let sc = &world.scene;
     let bits = simd::bitmask(mask);
     let (zero, one) = (simd::splat(0.0), simd::splat(1.0));
@@ -135,7 +162,7 @@ pub fn shade8(
     // surface: q, interpolated N (Ng where it vanishes), back-face flip, Od, material.
     let (b1, b2) = (hits.b1, hits.b2);
     let b0 = one - b1 - b2;
-    let gl = gather(world, hits, bits, [b0, b1, b2].map(simd::lanes));
+    let gl = gather(world, hits, insts, bits, [b0, b1, b2].map(simd::lanes));
     let q = rays.o + rays.d.scale(hits.t);
     let mut ng = vec3x8(&gl.ng);
     let ni =

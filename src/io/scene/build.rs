@@ -102,8 +102,36 @@ fn build_scene_at(
         objects.push(b.object(i, d)?);
     }
 
-    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own.
-    lights.extend(crate::scene::emitter_lights(&objects, &b.materials));
+    let instances = super::instances::placements(file, path, &objects, &b.materials)?;
+
+    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own
+    // (of the objects drawn as they are: a placed mesh's lamps are not made lights).
+    let mut placed = vec![false; objects.len()];
+    for p in &instances {
+        placed[p.object] = true;
+    }
+    if instances.is_empty() {
+        lights.extend(crate::scene::emitter_lights(&objects, &b.materials));
+    } else {
+        for (o, _) in objects.iter().zip(&placed).filter(|(_, p)| **p) {
+            let lamp = |m: usize| b.materials[m].lamp && b.materials[m].emits();
+            let emits = match &o.face_materials {
+                Some(f) => f.iter().any(|&m| lamp(m as usize)),
+                None => lamp(o.material),
+            };
+            if emits {
+                b.warnings.push(format!(
+                    "mesh '{}' is placed by [[instance]]: its emitting faces show `ke` but light nothing (lamps are made lights only on meshes drawn as they are)",
+                    o.name
+                ));
+            }
+        }
+        let own: Vec<Object> = (objects.iter().zip(&placed))
+            .filter(|(_, p)| !**p)
+            .map(|(o, _)| o.clone())
+            .collect();
+        lights.extend(crate::scene::emitter_lights(&own, &b.materials));
+    }
 
     let scene = Scene {
         width,
@@ -116,6 +144,7 @@ fn build_scene_at(
         objects,
         cull_backfaces: r.cull_backfaces,
         depth: r.depth,
+        instances,
     };
     Ok((scene, b.warnings))
 }

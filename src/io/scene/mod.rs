@@ -10,6 +10,7 @@
 //! builder depends on the loaders.
 
 pub mod build;
+mod instances;
 mod materials;
 pub mod meshes;
 pub mod overrides;

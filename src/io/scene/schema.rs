@@ -48,6 +48,10 @@ pub struct SceneFile {
     /// `[[mesh]]`: meshes from files, inline triangles or generated shapes.
     #[serde(default, rename = "mesh", skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<MeshDesc>,
+    /// `[[instance]]`: placements of meshes by name (a placed mesh is drawn only where
+    /// its instances put it).
+    #[serde(default, rename = "instance", skip_serializing_if = "Vec::is_empty")]
+    pub instances: Vec<InstanceDesc>,
     /// Lines of the keys in the text this was parsed from (empty for scenes made in code).
     #[serde(skip)]
     pub lines: KeyLines,
@@ -490,6 +494,48 @@ pub struct CheckerDesc {
     /// The other colour.
     #[serde(deserialize_with = "exact3::de")]
     pub b: [f32; 3],
+}
+
+/// `[[instance]]`: a mesh by name, placed by `scale`, then `rotate`, then `translate`, or by
+/// a `matrix`.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceDesc {
+    /// The `name` of a `[[mesh]]`.
+    pub mesh: String,
+    /// A scene material for the whole instance (default: the mesh's own).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub material: String,
+    /// Offset along x, y, z (applied last).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt"
+    )]
+    pub translate: Option<[f32; 3]>,
+    /// Rotation in degrees about x, then y, then z (applied after the scale).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact3::opt"
+    )]
+    pub rotate: Option<[f32; 3]>,
+    /// Scale: one factor, or one per axis (applied first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<ScaleDesc>,
+    /// Or the whole transform: 4 rows of 4 (the last `[0, 0, 0, 1]`), object to world.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<[[f32; 4]; 4]>,
+}
+
+/// `scale = 2` or `scale = [1, 2, 1]`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum ScaleDesc {
+    /// The same factor on every axis.
+    Uniform(f32),
+    /// One factor per axis.
+    Axes([f32; 3]),
 }
 
 /// `[[mesh]]`: exactly one of `file`, `vertices` + `faces`, or `shape`.
