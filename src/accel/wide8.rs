@@ -51,14 +51,20 @@ impl Boxes {
             count: 0,
             first: 0,
         };
+        self.node(&n, rays, here)
+    }
+
+    /// The lanes of `here` whose ray meets the box of `n` within its limits.
+    #[inline(always)]
+    fn node(&self, n: &Node, rays: &RayPacket8, here: M32x8) -> M32x8 {
         match &self.octant {
             Some((inv_far, near)) => {
                 hit_box8_octant(
-                    &n, &rays.o, &self.inv, inv_far, *near, rays.tnear, self.far, here,
+                    n, &rays.o, &self.inv, inv_far, *near, rays.tnear, self.far, here,
                 )
                 .0
             }
-            None => hit_box8(&n, &rays.o, &self.inv, rays.tnear, rays.tfar, here).0,
+            None => hit_box8(n, &rays.o, &self.inv, rays.tnear, rays.tfar, here).0,
         }
     }
 }
@@ -89,6 +95,16 @@ pub(super) fn occluded_wide8(accel: &Accel, rays: &RayPacket8, active: M32x8, cu
     };
     // entries: a node and the lanes that met its box.
     let mut stack: Stack<(u32, u32), 64> = Stack::new();
+    // the scene's box first (the binary tree's root): packets that miss the mesh (camera
+    // rays past it) leave here, as they leave the binary walk at its root, not after the
+    // root's 8 child tests
+    let Some(root) = accel.nodes.first() else {
+        return simd::mask_from_bits(0);
+    };
+    active &= simd::bitmask(boxes.node(root, rays, simd::mask_from_bits(active)));
+    if active == 0 {
+        return simd::mask_from_bits(0);
+    }
     let (mut cur, mut here) = (0u32, active);
     STACK.with_borrow_mut(|st| {
         grow_stack(st, bvh);
