@@ -208,7 +208,11 @@ fn obvhs_bvh2(tris: &[[Vec3; 3]], quality: BuildQuality) -> (Vec<Node>, Vec<u32>
     (nodes, bvh.primitive_indices)
 }
 
-fn tree_depth(nodes: &[Node]) -> usize {
+/// Nodes on the deepest root-to-leaf path of a BVH2 (0 for an empty tree).
+pub(crate) fn tree_depth(nodes: &[Node]) -> usize {
+    if nodes.is_empty() {
+        return 0;
+    }
     let mut max = 0;
     let mut stack = vec![(0usize, 1usize)];
     while let Some((i, d)) = stack.pop() {
