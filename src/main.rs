@@ -600,7 +600,10 @@ fn cmd_render(args: RenderArgs) -> Result<()> {
         );
     }
     if args.stats {
-        print_stats(&world, &stats, engine);
+        print!(
+            "{}",
+            whitted::render::report::stats_text(&world, &stats, engine)
+        );
         print_times(load_time, &stats, &times, write_wall);
     }
     Ok(())
@@ -630,74 +633,5 @@ fn print_times(
         secs(&times.aov_ns),
         secs(&times.write_ns),
         write_wall.saturating_sub(stats.time).as_secs_f64()
-    );
-}
-
-/// `--stats`: BVH build, rays per queue, time and Mrays/s per phase (thread time, summed over
-/// worker threads, so per-phase Mrays/s is per thread), total.
-fn print_stats(
-    world: &World,
-    stats: &whitted::render::RenderStats,
-    engine: whitted::trace::Engine,
-) {
-    let r = &stats.rays;
-    let load = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed);
-    let (primary, shadow, refl, refr) = (
-        load(&r.primary),
-        load(&r.shadow),
-        load(&r.reflection),
-        load(&r.refraction),
-    );
-    println!("engine            {engine:?}");
-    match &world.instanced {
-        None => println!(
-            "BVH build         {:.1} ms ({} triangles, depth {})",
-            world.accel.build_time.as_secs_f64() * 1e3,
-            world.accel.tris.len(),
-            world.accel.depth
-        ),
-        Some(i) => println!(
-            "BVH build         {:.1} ms ({} triangles in {} instances of {} meshes, {} stored; top level {} nodes)",
-            i.build_time.as_secs_f64() * 1e3,
-            i.tracer.triangles,
-            i.tracer.instances.len(),
-            i.tracer.meshes.len(),
-            i.geometries
-                .iter()
-                .map(|g| g.triangles.len())
-                .sum::<usize>(),
-            i.tracer.top_nodes()
-        ),
-    }
-    println!(
-        "rays              primary {primary}, shadow {shadow}, reflection {refl}, refraction {refr}"
-    );
-    let (repeated, repeated_shadow) = (load(&r.repeated), load(&r.repeated_shadow));
-    if repeated > 0 {
-        println!(
-            "repeated rays     {repeated} reflection and refraction, {repeated_shadow} shadow: each is another ray bit for bit and takes its answer untraced"
-        );
-    }
-    if engine != whitted::trace::Engine::Scalar {
-        let rays_of = [primary, primary + refl + refr, shadow, refl + refr];
-        for (k, name) in whitted::render::RenderStats::PHASES.iter().enumerate() {
-            let secs = load(&stats.phase_ns[k]) as f64 * 1e-9;
-            let what = if *name == "shade" {
-                "hits+misses shaded"
-            } else {
-                "rays"
-            };
-            println!(
-                "phase {name:<11} {secs:8.3} thread-s  {:8.2} M{what}/thread-s",
-                rays_of[k] as f64 / secs.max(1e-12) / 1e6
-            );
-        }
-    } else {
-        println!("phases            (only the wavefront engines time their phases)");
-    }
-    let secs = stats.time.as_secs_f64();
-    println!(
-        "total             {secs:.3} s wall, {:.2} Mrays/s",
-        r.total() as f64 / secs.max(1e-12) / 1e6
     );
 }

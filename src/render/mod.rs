@@ -4,6 +4,7 @@ pub mod aov;
 pub mod part;
 pub mod queues;
 pub mod recursive;
+pub mod report;
 pub mod wavefront;
 
 pub use crate::trace::Engine;
