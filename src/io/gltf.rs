@@ -256,18 +256,7 @@ pub fn parse_with(
     path: &Path,
     read_file: &mut FileReader,
 ) -> Result<(Model, Vec<String>)> {
-    let (json, bin) = if bytes.starts_with(GLB_MAGIC) {
-        glb_chunks(bytes, path)?
-    } else {
-        (bytes, None)
-    };
-    let doc: Document = serde_json::from_slice(json).map_err(|e| {
-        Error::parse(
-            path,
-            e.line(),
-            format!("glTF JSON, column {}: {e}", e.column()),
-        )
-    })?;
+    let (doc, bin) = document(bytes, path)?;
     let mut warnings = Vec::new();
     if !doc.asset.version.starts_with("2.") {
         return Err(at(
@@ -304,6 +293,23 @@ pub fn parse_with(
     let buffers = load_buffers(&doc, bin, path, read_file)?;
     let model = mesh::build(&doc, &buffers, path, &mut warnings)?;
     Ok((model, warnings))
+}
+
+/// The glTF JSON of a `.gltf` or `.glb` file's bytes, and a GLB's binary chunk.
+fn document<'a>(bytes: &'a [u8], path: &Path) -> Result<(Document, Option<&'a [u8]>)> {
+    let (json, bin) = if bytes.starts_with(GLB_MAGIC) {
+        glb_chunks(bytes, path)?
+    } else {
+        (bytes, None)
+    };
+    let doc: Document = serde_json::from_slice(json).map_err(|e| {
+        Error::parse(
+            path,
+            e.line(),
+            format!("glTF JSON, column {}: {e}", e.column()),
+        )
+    })?;
+    Ok((doc, bin))
 }
 
 /// The JSON and `BIN` chunks of a GLB file, checked against its length.

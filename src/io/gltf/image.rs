@@ -6,7 +6,7 @@
 //! scene builder decodes it through [`load_image`] when the material is built. The mesh loader
 //! only checks where the bytes are ([`source`]), so loading a mesh decodes no image.
 
-use super::{Document, FileReader, at, glb_chunks, load_buffers, percent_decode};
+use super::{Document, FileReader, at, load_buffers, percent_decode};
 use crate::error::{Error, Result};
 use crate::io::image::decode_texture;
 use crate::texture::Texture;
@@ -155,18 +155,7 @@ pub(super) fn image_in(
     index: usize,
     read_file: &mut FileReader,
 ) -> Result<Texture> {
-    let (json, bin) = if bytes.starts_with(super::GLB_MAGIC) {
-        glb_chunks(bytes, path)?
-    } else {
-        (bytes, None)
-    };
-    let doc: Document = serde_json::from_slice(json).map_err(|e| {
-        Error::parse(
-            path,
-            e.line(),
-            format!("glTF JSON, column {}: {e}", e.column()),
-        )
-    })?;
+    let (doc, bin) = super::document(bytes, path)?;
     let key = format!("images[{index}]");
     let image = &doc.images.get(index).ok_or_else(|| {
         at(
