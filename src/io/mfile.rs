@@ -62,36 +62,21 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let err = |line: usize, msg: String| Error::parse(path, line, msg);
 
-    let mut ids: HashMap<u64, u32> = HashMap::new();
+    let mut ids = IdMap::new(bytes.len());
     let mut positions = Vec::new();
     let mut attrs: Vec<(VertexAttrs, usize)> = Vec::new();
-    // (line, vertex ids) of each face, resolved once every vertex is known.
-    let mut faces: Vec<(usize, Vec<u64>)> = Vec::new();
-    // The line of each face id, and the first id given twice (`(line, id, first line)`) with
+    // Each face's line and its vertex ids (a run of `face_verts`), resolved once every
+    // vertex is known.
+    let mut faces: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
+    let mut face_verts: Vec<u64> = Vec::new();
+    // The face of each face id, and the first id given twice (`(line, id, first line)`) with
     // how many more were: duplicate faces are kept, with a warning.
-    let mut face_ids: HashMap<u64, usize> = HashMap::new();
+    let mut face_ids = IdMap::new(bytes.len());
     let mut duplicate_face: Option<(usize, u64, usize)> = None;
     let mut more_duplicates = 0usize;
 
-    for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
-        let line_no = index + 1;
-        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let trimmed = raw.trim_ascii_start();
-        if trimmed.is_empty() || trimmed[0] == b'#' {
-            continue;
-        }
-        if trimmed.contains(&0) {
-            return Err(err(
-                line_no,
-                "binary data (NUL byte); not a .m text file".into(),
-            ));
-        }
-        let text = std::str::from_utf8(trimmed).map_err(|_| {
-            err(
-                line_no,
-                "invalid UTF-8 outside a comment; not a .m text file".into(),
-            )
-        })?;
+    for (line_no, line) in lines(bytes) {
+        let text = line.map_err(|m| err(line_no, m.into()))?;
         let (head, body) = split_braces(text).map_err(|m| err(line_no, m))?;
         let mut tokens = head.split_ascii_whitespace();
         match tokens.next() {
@@ -115,7 +100,7 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
                 }
                 let a = parse_attrs(body.unwrap_or(""))
                     .map_err(|m| err(line_no, format!("Vertex {id}: {m}")))?;
-                if ids.insert(id, positions.len() as u32).is_some() {
+                if ids.insert_new(id, positions.len() as u32).is_some() {
                     return Err(err(line_no, format!("duplicate vertex id {id}")));
                 }
                 positions.push(Vec3::from(xyz));
@@ -123,28 +108,30 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
             }
             Some("Face") => {
                 let id = parse_id(tokens.next(), "face id").map_err(|m| err(line_no, m))?;
-                let verts = tokens
-                    .map(|t| parse_id(Some(t), "vertex id"))
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
-                if verts.len() < 3 {
+                let start = face_verts.len();
+                for t in tokens {
+                    let v = parse_id(Some(t), "vertex id")
+                        .map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
+                    face_verts.push(v);
+                }
+                let count = face_verts.len() - start;
+                if count < 3 {
                     return Err(err(
                         line_no,
-                        format!("Face {id}: needs at least 3 vertices, has {}", verts.len()),
+                        format!("Face {id}: needs at least 3 vertices, has {count}"),
                     ));
                 }
                 if let Some(b) = body {
                     parse_attrs(b).map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
                 }
-                if let Some(&first) = face_ids.get(&id) {
+                if let Some(first) = face_ids.insert_new(id, faces.len() as u32) {
+                    let first = faces[first as usize].0;
                     match duplicate_face {
                         None => duplicate_face = Some((line_no, id, first)),
                         Some(_) => more_duplicates += 1,
                     }
-                } else {
-                    face_ids.insert(id, line_no);
                 }
-                faces.push((line_no, verts));
+                faces.push((line_no, start..face_verts.len()));
             }
             // Edge, Corner and any other record type: not needed for rendering.
             _ => {}
@@ -158,15 +145,15 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
         ));
     }
     let mut triangles = Vec::with_capacity(faces.len());
+    let mut idx = Vec::new();
     for (line_no, verts) in &faces {
-        let idx = verts
-            .iter()
-            .map(|v| {
+        idx.clear();
+        for &v in &face_verts[verts.clone()] {
+            idx.push(
                 ids.get(v)
-                    .copied()
-                    .ok_or_else(|| err(*line_no, format!("face names undefined vertex {v}")))
-            })
-            .collect::<Result<Vec<u32>>>()?;
+                    .ok_or_else(|| err(*line_no, format!("face names undefined vertex {v}")))?,
+            );
+        }
         for k in 1..idx.len() - 1 {
             triangles.push([idx[0], idx[k], idx[k + 1]]);
         }
@@ -238,6 +225,107 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     })
 }
 
+/// The lines of a `.m` file that hold a record (not blank, not a comment), numbered from 1,
+/// without their CR and leading blanks: the text, or why the line is not text (comments may
+/// hold any bytes). Usually the whole file is UTF-8 without NUL bytes, checked once;
+/// otherwise each record line is checked.
+fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, Result<&str, &'static str>)> {
+    let whole = match bytes.contains(&0) {
+        true => None,
+        false => std::str::from_utf8(bytes).ok(),
+    };
+    let base = bytes.as_ptr() as usize;
+    let mut start = 0;
+    memchr::memchr_iter(b'\n', bytes)
+        .map(Some)
+        .chain([None])
+        .map(move |end| {
+            let end = end.unwrap_or(bytes.len());
+            let line = &bytes[start..end];
+            start = end + 1;
+            line
+        })
+        .enumerate()
+        .filter_map(move |(index, raw)| {
+            let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+            let trimmed = raw.trim_ascii_start();
+            if trimmed.is_empty() || trimmed[0] == b'#' {
+                return None;
+            }
+            let text = match whole {
+                // (a line of the checked text: it starts and ends at an ASCII byte, so on
+                // character boundaries)
+                Some(whole) => {
+                    let at = trimmed.as_ptr() as usize - base;
+                    Ok(&whole[at..at + trimmed.len()])
+                }
+                None if trimmed.contains(&0) => Err("binary data (NUL byte); not a .m text file"),
+                None => std::str::from_utf8(trimmed)
+                    .map_err(|_| "invalid UTF-8 outside a comment; not a .m text file"),
+            };
+            Some((index + 1, text))
+        })
+}
+
+/// Record ids to indices. Ids are usually `1..=n`, so ids below a bound set by the file's
+/// size (an eighth of its bytes: at most half its size in memory) index a vector; larger
+/// ones go to a map, as ids may be any positive `u64`. A hash per id was a third of the
+/// kitten's parse.
+struct IdMap {
+    dense: Vec<u32>,
+    limit: u64,
+    sparse: HashMap<u64, u32>,
+}
+
+impl IdMap {
+    /// Absent in `dense`.
+    const NONE: u32 = u32::MAX;
+
+    fn new(file_len: usize) -> IdMap {
+        IdMap {
+            dense: Vec::new(),
+            limit: (file_len / 8) as u64 + 1024,
+            sparse: HashMap::new(),
+        }
+    }
+
+    fn get(&self, id: u64) -> Option<u32> {
+        if id < self.limit {
+            self.dense
+                .get(id as usize)
+                .copied()
+                .filter(|&v| v != Self::NONE)
+        } else {
+            self.sparse.get(&id).copied()
+        }
+    }
+
+    /// Map `id` to `v` unless it is mapped already: then its index, unchanged.
+    fn insert_new(&mut self, id: u64, v: u32) -> Option<u32> {
+        if id < self.limit {
+            let i = id as usize;
+            if i >= self.dense.len() {
+                self.dense.resize(i + 1, Self::NONE);
+            }
+            match self.dense[i] {
+                Self::NONE => {
+                    self.dense[i] = v;
+                    None
+                }
+                old => Some(old),
+            }
+        } else {
+            match self.sparse.entry(id) {
+                std::collections::hash_map::Entry::Occupied(e) => Some(*e.get()),
+                std::collections::hash_map::Entry::Vacant(e) => {
+                    e.insert(v);
+                    None
+                }
+            }
+        }
+    }
+}
+
 /// One attribute per vertex when any vertex has it (`None` when none does): the vertices
 /// without it get `fill`, and a gap note (`2 of 5 have no uv ...`) is added to `gaps`.
 fn partial<T: Copy>(
@@ -289,8 +377,11 @@ fn parse_attrs(body: &str) -> Result<VertexAttrs, String> {
     let mut out = VertexAttrs::default();
     let mut rest = body.trim_start();
     while !rest.is_empty() {
+        // (a byte search: '=' and ASCII blanks are single bytes, so their positions are
+        // character boundaries)
         let key_end = rest
-            .find(|c: char| c == '=' || c.is_ascii_whitespace())
+            .bytes()
+            .position(|b| b == b'=' || b.is_ascii_whitespace())
             .unwrap_or(rest.len());
         let key = &rest[..key_end];
         rest = &rest[key_end..];
@@ -310,21 +401,25 @@ fn parse_attrs(body: &str) -> Result<VertexAttrs, String> {
                     _ => 0,
                 };
                 if want > 0 {
-                    let nums = inner
-                        .split_ascii_whitespace()
-                        .map(parse_f32)
-                        .collect::<Result<Vec<f32>, String>>()
-                        .map_err(|m| format!("{key}=({inner}): {m}"))?;
-                    if nums.len() != want {
+                    // every number parsed (the first bad one is the error), then counted
+                    let mut nums = [0f32; 3];
+                    let mut found = 0;
+                    for tok in inner.split_ascii_whitespace() {
+                        let v = parse_f32(tok).map_err(|m| format!("{key}=({inner}): {m}"))?;
+                        if let Some(slot) = nums.get_mut(found) {
+                            *slot = v;
+                        }
+                        found += 1;
+                    }
+                    if found != want {
                         return Err(format!(
-                            "{key}=({inner}): expected {want} numbers, found {}",
-                            nums.len()
+                            "{key}=({inner}): expected {want} numbers, found {found}"
                         ));
                     }
                     match key {
-                        "normal" => out.normal = Some(Vec3::from_slice(&nums)),
-                        "uv" => out.uv = Some(Vec2::from_slice(&nums)),
-                        _ => out.rgb = Some(Vec3::from_slice(&nums)),
+                        "normal" => out.normal = Some(Vec3::from_array(nums)),
+                        "uv" => out.uv = Some(Vec2::new(nums[0], nums[1])),
+                        _ => out.rgb = Some(Vec3::from_array(nums)),
                     }
                 }
             } else {
@@ -332,7 +427,8 @@ fn parse_attrs(body: &str) -> Result<VertexAttrs, String> {
                     return Err(format!("{key}= must be followed by a tuple '(...)'"));
                 }
                 let end = after
-                    .find(|c: char| c.is_ascii_whitespace())
+                    .bytes()
+                    .position(|b| b.is_ascii_whitespace())
                     .unwrap_or(after.len());
                 rest = &after[end..];
             }
@@ -353,11 +449,15 @@ fn parse_id(tok: Option<&str>, what: &str) -> Result<u64, String> {
     }
 }
 
-/// A finite number that fits in f32 (E-notation allowed; `nan`, `inf` refused).
+/// A finite number that fits in f32 (E-notation allowed; `nan`, `inf` refused): the f64
+/// nearest the decimal, rounded to f32.
 fn parse_f32(tok: &str) -> Result<f32, String> {
-    let v: f64 = tok
-        .parse()
-        .map_err(|_| format!("'{tok}' is not a number"))?;
+    let v: f64 = match plain_decimal(tok) {
+        Some(v) => v,
+        None => tok
+            .parse()
+            .map_err(|_| format!("'{tok}' is not a number"))?,
+    };
     if !v.is_finite() {
         return Err(format!("'{tok}' is not a finite number"));
     }
@@ -365,6 +465,44 @@ fn parse_f32(tok: &str) -> Result<f32, String> {
         return Err(format!("'{tok}' is out of range for f32"));
     }
     Ok(v as f32)
+}
+
+/// Exact powers of ten in f64 (`10^k` for `k <= 22` has at most 53 significant bits).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// The f64 nearest a plain decimal (`-0.474563`: a sign, at most 15 digits, a point, no
+/// exponent), as `str::parse` gives it but in a few instructions: the digits as an integer
+/// below 2^53 and a power of ten up to 10^22 are both exact in f64, so their quotient is
+/// rounded once, to the nearest f64 (Clinger's fast path). `None` for anything else, which
+/// `str::parse` then reads. Coordinates in text meshes are nearly all of this form; their
+/// parse was two thirds of the kitten's load.
+fn plain_decimal(tok: &str) -> Option<f64> {
+    let b = tok.as_bytes();
+    let (negative, digits) = match b.first()? {
+        b'-' => (true, &b[1..]),
+        b'+' => (false, &b[1..]),
+        _ => (false, b),
+    };
+    let mut mantissa = 0u64;
+    let (mut count, mut fraction) = (0usize, None);
+    for (i, &c) in digits.iter().enumerate() {
+        match c {
+            b'0'..=b'9' => {
+                mantissa = mantissa * 10 + u64::from(c - b'0');
+                count += 1;
+            }
+            b'.' if fraction.is_none() => fraction = Some(digits.len() - i - 1),
+            _ => return None,
+        }
+    }
+    if count == 0 || count > 15 {
+        return None;
+    }
+    let v = mantissa as f64 / POW10[fraction.unwrap_or(0)];
+    Some(if negative { -v } else { v })
 }
 
 #[cfg(test)]
@@ -516,6 +654,61 @@ mod tests {
             ]
         );
         assert!(parse(QUAD).unwrap().1.is_empty());
+    }
+
+    /// The fast path's numbers are `str::parse`'s, bit for bit, and it leaves every other
+    /// form to it.
+    #[test]
+    fn plain_decimals_parse_as_the_standard_library_does() {
+        for tok in [
+            "0",
+            "-0",
+            "+0",
+            "-0.474563",
+            "0.1",
+            "0.3",
+            "1.",
+            ".5",
+            "-.5",
+            "123456789012345",
+            "0.000000000000001",
+            "9.99999999999999",
+            "-0.0844681",
+            "1e-7",
+        ] {
+            let want: f64 = tok.parse().unwrap();
+            let got = plain_decimal(tok).unwrap_or(want);
+            assert_eq!(got.to_bits(), want.to_bits(), "{tok}");
+        }
+        for tok in [
+            "",
+            ".",
+            "-",
+            "+",
+            "--1",
+            "1.2.3",
+            "1e5",
+            "1E5",
+            "nan",
+            "inf",
+            "0x10",
+            "1,5",
+            "1234567890123456",
+            "1 2",
+        ] {
+            assert_eq!(plain_decimal(tok), None, "{tok}");
+        }
+        use proptest::prelude::*;
+        proptest!(|(m in 0u64..1_000_000_000_000_000, point in 0usize..17, neg: bool)| {
+            let digits = m.to_string();
+            let point = point.min(digits.len());
+            let tok = format!("{}{}.{}", if neg { "-" } else { "" }, &digits[..digits.len() - point], &digits[digits.len() - point..]);
+            let want: f64 = tok.parse().unwrap();
+            match plain_decimal(&tok) {
+                Some(got) => prop_assert_eq!(got.to_bits(), want.to_bits(), "{}", tok),
+                None => prop_assert!(digits.len() > 15, "{}", tok),
+            }
+        });
     }
 
     #[test]
