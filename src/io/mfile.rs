@@ -490,7 +490,8 @@ fn plain_decimal(tok: &str) -> Option<f64> {
     let (mut count, mut fraction) = (0usize, None);
     for (i, &c) in digits.iter().enumerate() {
         match c {
-            b'0'..=b'9' => {
+            // (at most 15 digits, so the mantissa stays below 10^15)
+            b'0'..=b'9' if count < 15 => {
                 mantissa = mantissa * 10 + u64::from(c - b'0');
                 count += 1;
             }
@@ -498,7 +499,7 @@ fn plain_decimal(tok: &str) -> Option<f64> {
             _ => return None,
         }
     }
-    if count == 0 || count > 15 {
+    if count == 0 {
         return None;
     }
     let v = mantissa as f64 / POW10[fraction.unwrap_or(0)];
@@ -695,6 +696,7 @@ mod tests {
             "1,5",
             "1234567890123456",
             "1 2",
+            "123456789012345678901234567890",
         ] {
             assert_eq!(plain_decimal(tok), None, "{tok}");
         }
