@@ -294,26 +294,79 @@ fn info_lists_instances() {
     assert!(text.contains("instances: 2\n"), "{text}");
 }
 
+/// Lamps placed by `[[instance]]` (turned, scaled, mirrored, one in a material of its
+/// own): their lights are those of the scene flattened, and it renders as that scene.
 #[test]
-fn placed_lamps_are_named_in_a_warning() {
-    use whitted::io::scene::{SceneFile, SearchPath, build_scene};
-    let path = std::path::Path::new("field.toml");
-    let text = FIELD.replacen(
-        "color = [0.9, 0.5, 0.2]",
-        "color = [0.9, 0.5, 0.2]\nke = 1",
-        1,
+fn placed_lamps_light_the_scene_as_the_scene_flattened() {
+    let text = format!(
+        "{FIELD}{}",
+        r#"
+[[material]]
+name = "lamp"
+color = [1, 1, 1]
+ke = [6, 5, 4]
+[[material]]
+name = "lamp2"
+color = [1, 1, 1]
+ke = [1, 2, 6]
+[[mesh]]
+name = "lamp"
+shape = "quad"
+size = [0.5, 1, 0.5]
+material = "lamp"
+[[instance]]
+mesh = "lamp"
+translate = [-2, 3, 0]
+rotate = [180, 0, 0]
+[[instance]]
+mesh = "lamp"
+material = "lamp2"
+translate = [2, 3, 1]
+rotate = [180, 0, 0]
+scale = [2, 1, 1]
+[[instance]]
+mesh = "lamp"
+matrix = [[1, 0, 0, 0], [0, -1, 0, 3.5], [0, 0, 1, -1], [0, 0, 0, 1]]
+"#
     );
-    let file = SceneFile::parse(&text, path).unwrap();
-    let search = SearchPath {
-        dirs: vec![common::assets()],
-    };
-    let (scene, warnings) = build_scene(&file, path, &search).unwrap();
+    let scene = build(&text).unwrap();
+    assert_eq!(scene.instances.len(), 5);
+    // the file's light, then one per lamp material facing down
+    assert_eq!(scene.lights.len(), 3, "{:?}", scene.lights);
+    let mut flat = scene.flattened();
+    flat.lights.truncate(1);
+    flat.lights.extend(whitted::scene::emitter_lights(
+        &flat.objects,
+        &flat.materials,
+    ));
+    assert_eq!(flat.lights.len(), 3);
+    for (a, b) in scene.lights.iter().zip(&flat.lights) {
+        assert!(
+            a.position.distance(b.position) < 1e-3,
+            "{a:?} against {b:?}"
+        );
+        assert!(
+            a.intensity.distance(b.intensity) < 1e-5,
+            "{a:?} against {b:?}"
+        );
+    }
+    // below the lamps, facing down
     assert!(
-        warnings
+        scene.lights[1..]
             .iter()
-            .any(|w| w.contains("'kitten'") && w.contains("light nothing")),
-        "{warnings:?}"
+            .all(|l| l.position.y < 3.0 && l.position.y > 2.9)
     );
-    // the one light of the file, none made of the placed kitten's faces
-    assert_eq!(scene.lights.len(), 1);
+    let (mut scene, mut flat) = (scene, flat);
+    for s in [&mut scene, &mut flat] {
+        (s.width, s.height) = (80, 60);
+    }
+    let (wi, mut wf) = (World::new(scene), World::new(flat));
+    wf.eps = wi.eps;
+    let settings = Settings::default();
+    let a = render(&wi, &settings, &|_| ()).0;
+    let b = render(&wf, &settings, &|_| ()).0;
+    let off = (a.pixels.iter().zip(&b.pixels))
+        .filter(|(x, y)| (**x - **y).abs().max_element() > 1e-3)
+        .count();
+    assert!(off <= a.pixels.len() / 200, "{off} pixels differ");
 }
