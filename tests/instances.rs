@@ -2,6 +2,11 @@
 
 mod common;
 
+/// The field's writer (`cargo run --example kitten_field -- N OUT.glb`).
+#[path = "../examples/kitten_field.rs"]
+#[allow(dead_code)]
+mod kitten_field;
+
 use glam::{Affine3A, Quat, Vec3};
 use whitted::render::{Engine, Settings, World, render};
 use whitted::scene::{Object, Placement, Scene};
@@ -263,6 +268,50 @@ fn a_million_kittens_render_at_1080p() {
             stats.rays.total()
         );
         assert!(lit > 100_000, "{lit} kitten pixels");
+    }
+}
+
+/// The same targets through one GLB (`examples/kitten_field.rs`: the kitten stored once,
+/// drawn by one node's `EXT_mesh_gpu_instancing`), read as `whitted render field.glb`
+/// reads it; the peak memory of that command is measured with
+///
+///     cargo run --release --example kitten_field -- 1000 field.glb
+///     /usr/bin/time -v target/release/whitted render field.glb --width 1920 --height 1080
+#[test]
+#[ignore = "minutes and up to 2 GB: run by hand"]
+fn a_million_kittens_from_one_glb_render_at_1080p() {
+    use whitted::io::mesh_scene::scene_for_mesh;
+    use whitted::io::scene::{SearchPath, build_scene};
+    for n in [100, 1000] {
+        let path = common::scratch("instances", &format!("field{n}.glb"));
+        std::fs::write(&path, kitten_field::glb(n)).unwrap();
+        let start = std::time::Instant::now();
+        let (file, warnings) = scene_for_mesh(&path, 1920, 1080).unwrap();
+        let (scene, more) = build_scene(&file, &path, &SearchPath::for_scene(None)).unwrap();
+        assert!(
+            warnings.is_empty() && more.is_empty(),
+            "{warnings:?} {more:?}"
+        );
+        assert_eq!(scene.instances.len(), (n * n) as usize);
+        assert_eq!(scene.stored_triangle_count(), 20438 + 2);
+        let loaded = start.elapsed();
+        let world = World::new(scene);
+        let i = world.instanced.as_ref().unwrap();
+        // the kitten's placements and the floor, drawn as it is
+        assert_eq!(i.tracer.instances.len(), (n * n) as usize + 1);
+        let (image, stats) = render(&world, &Settings::default(), &|_| ());
+        let lit = image.pixels.iter().filter(|p| p.x > 1.3 * p.z).count();
+        println!(
+            "{} kittens from a GLB ({} triangles): loaded in {:.2} s, BVH {:.2} s, rendered 1920x1080 in {:.2} s ({} rays); {lit} orange pixels",
+            n * n,
+            i.tracer.triangles,
+            loaded.as_secs_f64(),
+            i.build_time.as_secs_f64(),
+            stats.time.as_secs_f64(),
+            stats.rays.total()
+        );
+        assert!(lit > 100_000, "{lit} kitten pixels");
+        std::fs::remove_file(&path).unwrap();
     }
 }
 
