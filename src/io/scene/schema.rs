@@ -107,6 +107,18 @@ impl KeyLines {
         KeyLines(out)
     }
 
+    /// Add the top-level keys of the TOML table body `text` as `prefix.key`, each on its line
+    /// in `text` plus `offset` (an `[[instance]]` table read alone).
+    pub(super) fn extend_table(&mut self, prefix: &str, text: &str, offset: usize) {
+        let Ok(doc) = toml::de::DeTable::parse(text) else {
+            return;
+        };
+        for (k, _) in doc.get_ref().iter() {
+            let line = offset + 1 + text[..k.span().start].matches('\n').count();
+            self.0.push((format!("{prefix}.{}", k.get_ref()), line));
+        }
+    }
+
     /// The line of `key` (as `mesh[1].file`), if the text had it.
     pub fn line(&self, key: &str) -> Option<usize> {
         self.0.iter().find(|(k, _)| k == key).map(|&(_, l)| l)

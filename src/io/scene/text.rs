@@ -9,16 +9,34 @@ impl SceneFile {
     /// Parse TOML text; errors carry the line and column of the offending key.
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let mut file: SceneFile = toml::from_str(text).map_err(|e| {
+        // `[[instance]]` tables are read one at a time (a field of 10^6 is 97 MB of text)
+        let cut = super::instance_text::cut(text);
+        let whole = cut.as_ref().map_or(text, |c| c.rest.as_str());
+        let mut file: SceneFile = toml::from_str(whole).map_err(|e| {
             let (line, col) = e
                 .span()
-                .map(|s| line_col(text.as_bytes(), s.start))
+                .map(|s| line_col(whole.as_bytes(), s.start))
                 .unwrap_or((0, 0));
             // toml's messages span several lines (a source excerpt); keep the first line.
             let msg = e.message().lines().next().unwrap_or("invalid TOML").trim();
             Error::parse(path, line, format!("column {col}: {msg}"))
         })?;
-        file.lines = KeyLines::of(text);
+        file.lines = KeyLines::of(whole);
+        if let Some(cut) = cut {
+            if let (false, Some(&(_, line))) = (file.instances.is_empty(), cut.tables.first()) {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    "column 1: instance is given both as an array and as [[instance]] tables",
+                ));
+            }
+            file.instances.reserve_exact(cut.tables.len());
+            for (i, &(body, line)) in cut.tables.iter().enumerate() {
+                let d = super::instance_text::instance(i, body, line, &mut file.lines)
+                    .map_err(|(l, c, m)| Error::parse(path, l, format!("column {c}: {m}")))?;
+                file.instances.push(d);
+            }
+        }
         // `kr` omitted = `ks`, but a material that gives neither gets the default material's
         // no reflection (a material with only a colour renders like a mesh's default).
         for (i, m) in file.materials.iter_mut().enumerate() {
@@ -140,7 +158,7 @@ fn not_a_scene(path: &Path) -> Result<()> {
 }
 
 /// 1-based (line, column in characters) of byte offset `at`, clamped to the text.
-fn line_col(text: &[u8], at: usize) -> (usize, usize) {
+pub(super) fn line_col(text: &[u8], at: usize) -> (usize, usize) {
     let before = &text[..at.min(text.len())];
     let line_start = before
         .iter()
