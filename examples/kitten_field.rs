@@ -272,10 +272,10 @@ pub fn glb(n: u32) -> Vec<u8> {
 /// A GLB container of `json` and the binary chunk `bin`, each padded to 4 bytes.
 fn container(json: &[u8], mut bin: Vec<u8>) -> Vec<u8> {
     let mut json = json.to_vec();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

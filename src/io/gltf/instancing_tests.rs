@@ -145,7 +145,7 @@ enum Rotations {
 /// `EXT_mesh_gpu_instancing`: three copies, translated, turned about y and scaled.
 fn gpu(rotations: Rotations) -> (Value, Vec<u8>) {
     let (mut d, mut bin) = doc(&TET, Some(&TET_FACES));
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let h = std::f32::consts::FRAC_1_SQRT_2;
