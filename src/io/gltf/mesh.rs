@@ -1,5 +1,7 @@
-//! A glTF document's scene flattened into one [`Model`]: node transforms applied, every
-//! primitive's triangles appended with its material, accessors read after their bounds are
+//! A glTF document's scene as one [`Model`]: the meshes drawn once flattened into its mesh
+//! (node transforms applied, every primitive's triangles appended with its material), the
+//! meshes drawn more than once read once in their own space with their placements
+//! ([`Model::shared`], decided in `instancing.rs`); accessors read after their bounds are
 //! checked.
 
 use super::accessor::{View, view};
