@@ -77,6 +77,10 @@ fn a_mesh_drawn_by_three_nodes_is_stored_once() {
     d["nodes"].as_array_mut().unwrap().push(json!({"mesh": 1}));
     let (m, _) = parse(&glb(&d, &bin)).unwrap();
     assert_eq!((m.shared.len(), m.shared[0].placements.len()), (1, 4));
+    // A shared mesh without primitives draws nothing, and a model of nothing else is refused.
+    let (mut d, bin) = three_nodes();
+    d["meshes"] = json!([{"primitives": []}, {"primitives": []}]);
+    assert!(err(&glb(&d, &bin)).contains("glTF scenes: no triangles in the scene's nodes"));
     // A mesh drawn once is flattened as before.
     let (d, bin) = doc(&TET, Some(&TET_FACES));
     let (m, _) = parse(&glb(&d, &bin)).unwrap();

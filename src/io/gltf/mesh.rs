@@ -52,8 +52,11 @@ pub(super) fn build(
             }
         }
     }
-    let empty = flat.mesh.triangles.is_empty() && shared.iter().all(|(_, _, p)| p.is_empty());
-    if empty {
+    // (a mesh without primitives, or whose copies are all left out, draws nothing)
+    shared.retain(|(_, g, p): &(usize, Gather, Vec<Affine3A>)| {
+        !(g.mesh.triangles.is_empty() || p.is_empty())
+    });
+    if flat.mesh.triangles.is_empty() && shared.is_empty() {
         return Err(at(path, "scenes", "no triangles in the scene's nodes"));
     }
     let all_uv = flat.all_uv && shared.iter().all(|(_, g, _)| g.all_uv);
