@@ -5,7 +5,8 @@
 //! its keys' lines recorded, and the rest of the file, the instance tables left as their
 //! newlines (so every line keeps its number), is parsed as a whole as before.
 
-use super::schema::{InstanceDesc, KeyLines};
+use super::schema::InstanceDesc;
+use super::text::KeyLines;
 use toml_parser::Source;
 use toml_parser::lexer::TokenKind;
 

@@ -24,6 +24,7 @@ pub use meshes::SPHERE_SEGMENTS;
 pub use overrides::{name_overrides, overrides_named};
 pub use schema::*;
 pub use search::{PROJECT_DATA, SearchPath};
+pub use text::KeyLines;
 
 #[cfg(test)]
 mod tests;
