@@ -63,6 +63,7 @@ pub fn info(path: &Path) -> Result<Info> {
     }
     let ext = crate::io::extension(path);
     match ext.as_str() {
+        "gltf" | "glb" => gltf_info(path, &ext),
         e if crate::io::MESH_EXTENSIONS.contains(&e) => {
             let (mesh, warnings, file_normals) = load_mesh_detail(path)?;
             let mut info = mesh_fields(&mesh, &ext, file_normals);
@@ -72,17 +73,6 @@ pub fn info(path: &Path) -> Result<Info> {
                 let (model, warnings) = crate::io::obj::load_obj_model(path)?;
                 info.fields.push(("materials", json!(model.material_info)));
                 info.warnings = warnings;
-            }
-            if ext == "gltf" || ext == "glb" {
-                // The file's materials as whitted reads them (scene material descriptions).
-                let (model, _) = crate::io::load_model(path)?;
-                // Through text, so that f32s print as written (0.8, not 0.800000011920929).
-                let text = serde_json::to_string(&model.materials).expect("materials serialise");
-                let materials: Value = serde_json::from_str(&text).expect("just written");
-                // Its meshes, instances, lights and cameras as the file lists them.
-                let bytes = crate::io::read_regular(path)?;
-                info.fields.extend(crate::io::gltf::listing(&bytes, path)?);
-                info.fields.push(("materials", materials));
             }
             Ok(info)
         }
@@ -109,6 +99,38 @@ pub fn info(path: &Path) -> Result<Info> {
             }
         }
     }
+}
+
+/// A glTF model: the mesh statistics of what it stores (each mesh drawn more than once
+/// counted once), the triangles it draws, the box of everything drawn, its meshes,
+/// instances, lights and cameras as the file lists them, and its materials as whitted reads
+/// them.
+fn gltf_info(path: &Path, ext: &str) -> Result<Info> {
+    let (model, warnings) = crate::io::load_model(path)?;
+    let mut stored = model.mesh.clone();
+    for s in &model.shared {
+        stored.append(&s.model.mesh);
+    }
+    let file_normals = model.file_normals && model.shared.iter().all(|s| s.model.file_normals);
+    let mut info = mesh_fields(&stored, ext, file_normals);
+    info.warnings = warnings;
+    let bounds = model
+        .bounds()
+        .map(|(lo, hi)| json!({"min": lo.to_array().map(short), "max": hi.to_array().map(short)}));
+    for (k, v) in &mut info.fields {
+        if *k == "bounds" {
+            *v = bounds.clone().unwrap_or(Value::Null);
+        }
+    }
+    info.fields
+        .push(("drawn_triangles", json!(model.drawn_triangles())));
+    // Through text, so that f32s print as written (0.8, not 0.800000011920929).
+    let text = serde_json::to_string(&model.materials).expect("materials serialise");
+    let materials: Value = serde_json::from_str(&text).expect("just written");
+    let bytes = crate::io::read_regular(path)?;
+    info.fields.extend(crate::io::gltf::listing(&bytes, path)?);
+    info.fields.push(("materials", materials));
+    Ok(info)
 }
 
 /// An EXR's display window (the whole image) and data window (the pixels stored: a part, for

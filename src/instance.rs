@@ -420,6 +420,17 @@ fn world_box(root: &Node, m: &Affine3A) -> (Vec3, Vec3) {
     (lo - err, hi + err)
 }
 
+/// Whether `m` is finite and has an inverse that f32 holds (computed in f64): the scene
+/// file and glTF readers refuse or skip placements that fail this.
+pub fn invertible(m: &Affine3A) -> bool {
+    let m3 = glam::DMat3::from_cols_array(&m.matrix3.to_cols_array().map(f64::from));
+    let det = m3.determinant();
+    // singular, or so near it that the inverse leaves f32
+    m.is_finite()
+        && det != 0.0
+        && (m3.inverse().to_cols_array().iter()).all(|x| (*x as f32).is_finite())
+}
+
 /// `m`'s inverse, computed in f64 and rounded once (an f32 inverse of a rotated, unevenly
 /// scaled placement carried object-space rays a few ulps further from the flattened scene's).
 fn inverse(m: &Affine3A) -> Affine3A {

@@ -1,6 +1,6 @@
 //! A triangle mesh as loaded from a file or generated in code, before any acceleration.
 
-use glam::{Vec2, Vec3};
+use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 pub(crate) mod shading;
 pub use shading::MAX_CREASE_PAIRS;
@@ -56,6 +56,55 @@ impl Mesh {
                 }
             }
         }
+    }
+
+    /// This mesh carried by `m` (object to world): positions as points, normals through the
+    /// inverse transpose (made unit again), uv and colours as they are; a mirroring `m`
+    /// swaps two corners of every triangle, so the front stays the front.
+    pub fn transformed(&self, m: &Affine3A) -> Mesh {
+        let linear = Mat3::from(m.matrix3);
+        let normal_matrix = linear.inverse().transpose();
+        let mut triangles = self.triangles.clone();
+        if linear.determinant() < 0.0 {
+            for t in &mut triangles {
+                t.swap(1, 2);
+            }
+        }
+        Mesh {
+            positions: self
+                .positions
+                .iter()
+                .map(|&p| m.transform_point3(p))
+                .collect(),
+            triangles,
+            normals: self.normals.as_ref().map(|ns| {
+                ns.iter()
+                    .map(|&n| (normal_matrix * n).normalize_or_zero())
+                    .collect()
+            }),
+            uvs: self.uvs.clone(),
+            colors: self.colors.clone(),
+        }
+    }
+
+    /// Append `other`'s vertices and triangles (its indices shifted past this mesh's). An
+    /// attribute stays only if both meshes have it (an empty mesh takes `other`'s).
+    pub fn append(&mut self, other: &Mesh) {
+        fn join<T: Copy>(a: &mut Option<Vec<T>>, b: &Option<Vec<T>>, first: bool) {
+            match (a.as_mut(), b) {
+                _ if first => *a = b.clone(),
+                (Some(a), Some(b)) => a.extend_from_slice(b),
+                _ => *a = None,
+            }
+        }
+        let first = self.positions.is_empty() && self.triangles.is_empty();
+        let base = self.positions.len() as u32;
+        join(&mut self.normals, &other.normals, first);
+        join(&mut self.uvs, &other.uvs, first);
+        join(&mut self.colors, &other.colors, first);
+        self.positions.extend_from_slice(&other.positions);
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|v| v + base)));
     }
 
     /// Number of triangles with zero area (never hit by any ray).

@@ -6,6 +6,11 @@ use crate::texture::{CubeMap, Texture};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
+mod emitters;
+pub use emitters::{
+    MAX_PLACED_LAMP_TRIANGLES, emitter_lights, emitter_lights_placed, placed_lamp_triangles,
+};
+
 /// A point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
@@ -197,6 +202,37 @@ impl Scene {
         placed
     }
 
+    /// The same scene without placements: the objects drawn as they are, then a copy of
+    /// the placed object per placement (in placement order), carried into the world by
+    /// [`Mesh::transformed`] and in the placement's material when it has one. Lights are
+    /// kept as they are. What the instanced scene is tested against.
+    pub fn flattened(&self) -> Scene {
+        let placed = self.placed_objects();
+        let mut objects: Vec<Object> = (self.objects.iter().zip(&placed))
+            .filter(|(_, p)| !**p)
+            .map(|(o, _)| o.clone())
+            .collect();
+        for p in &self.instances {
+            let o = &self.objects[p.object];
+            let mut copy = Object {
+                name: o.name.clone(),
+                mesh: o.mesh.transformed(&p.to_world),
+                material: o.material,
+                face_materials: o.face_materials.clone(),
+            };
+            if let Some(m) = p.material {
+                copy.material = m;
+                copy.face_materials = None;
+            }
+            objects.push(copy);
+        }
+        Scene {
+            objects,
+            instances: Vec::new(),
+            ..self.clone()
+        }
+    }
+
     /// Flatten every object into one triangle list with per-vertex shading attributes
     /// (placements aside: see [`Scene::geometry_of`]).
     pub fn geometry(&self) -> Geometry {
@@ -248,110 +284,6 @@ impl Scene {
             .collect();
         g
     }
-}
-
-/// Point lights standing in for the emitting surfaces (materials with `ke > 0` and `lamp`).
-///
-/// The triangles of each emitting material are grouped by the major axis and sign of their
-/// normal (a flat lamp is one group, a lamp box up to six). Each group gives one light: at
-/// its area-weighted centroid, moved along the group's mean normal just past its frontmost
-/// vertex (by `1e-3` of the scene's bounding-box diagonal), so the lamp's own triangles lie
-/// behind it and do not shadow it. Intensities are `ke` times the group's area, scaled so
-/// that the brightest channel of all emitter lights together is 1 (point lights have no
-/// fall-off here, so only the ratios of `Ke` and area matter; the total matches one
-/// canonical key light). The emitting surfaces themselves show `ke` as given.
-pub fn emitter_lights(objects: &[Object], materials: &[Material]) -> Vec<Light> {
-    #[derive(Clone, Copy, Default)]
-    struct Group {
-        area: f32,
-        centroid: Vec3,
-        normal: Vec3,
-    }
-    let lamps: Vec<usize> = (0..materials.len())
-        .filter(|&m| materials[m].lamp && materials[m].emits())
-        .collect();
-    if lamps.is_empty() {
-        return Vec::new();
-    }
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for o in objects {
-        if let Some((a, b)) = o.mesh.bounds() {
-            (lo, hi) = (lo.min(a), hi.max(b));
-        }
-    }
-    let margin = 1e-3 * (hi - lo).length();
-    let material_of = |o: &Object, t: usize| {
-        o.face_materials
-            .as_ref()
-            .map_or(o.material, |f| f[t] as usize)
-    };
-    let bin = |n: Vec3| {
-        let a = n.abs();
-        let axis = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        axis * 2 + (n[axis] < 0.0) as usize
-    };
-    // One pass to sum area, centroid and normal per (material, normal bin), one for the
-    // frontmost vertex of each group: linear in the triangles whatever the number of lamps.
-    let is_lamp: Vec<bool> = (0..materials.len()).map(|m| lamps.contains(&m)).collect();
-    let mut groups = vec![Group::default(); materials.len() * 6];
-    let is_lamp = &is_lamp;
-    let lamp_triangles = || {
-        objects.iter().flat_map(move |o| {
-            (0..o.mesh.triangles.len()).filter_map(move |t| {
-                let m = material_of(o, t);
-                let c = o.mesh.face_cross(t);
-                (is_lamp[m] && c.length_squared() > 0.0).then(|| (o, t, m * 6 + bin(c), c))
-            })
-        })
-    };
-    for (o, t, g, c) in lamp_triangles() {
-        let area = 0.5 * c.length();
-        let [a, b, d] = o.mesh.triangles[t].map(|i| o.mesh.positions[i as usize]);
-        let g = &mut groups[g];
-        g.area += area;
-        g.centroid += area * (a + b + d) / 3.0;
-        g.normal += c;
-    }
-    let frame: Vec<(Vec3, Vec3)> = groups
-        .iter()
-        .enumerate()
-        .map(|(k, g)| {
-            let n = g.normal.try_normalize().unwrap_or(Vec3::AXES[(k % 6) / 2]);
-            (g.centroid / g.area, n)
-        })
-        .collect();
-    let mut front = vec![0.0f32; groups.len()];
-    for (o, t, g, _) in lamp_triangles() {
-        let (centroid, n) = frame[g];
-        for &i in &o.mesh.triangles[t] {
-            front[g] = front[g].max((o.mesh.positions[i as usize] - centroid).dot(n));
-        }
-    }
-    let mut lights: Vec<(Vec3, Vec3)> = Vec::new();
-    for (k, g) in groups.iter().enumerate() {
-        if g.area > 0.0 && g.area.is_finite() {
-            let (centroid, n) = frame[k];
-            lights.push((
-                centroid + n * (front[k] + margin),
-                materials[k / 6].ke * g.area,
-            ));
-        }
-    }
-    let total = lights.iter().fold(Vec3::ZERO, |s, l| s + l.1).max_element();
-    lights
-        .into_iter()
-        .filter(|_| total > 0.0 && total.is_finite())
-        .map(|(position, power)| Light {
-            position,
-            intensity: power / total,
-        })
-        .collect()
 }
 
 /// All triangles of a scene in one list (the order of objects, then of each mesh's faces),
@@ -533,75 +465,5 @@ pub mod shapes {
             let q = quad(Vec3::ZERO, Vec3::X, Vec3::NEG_Z);
             assert!(q.face_cross(0).normalize().abs_diff_eq(Vec3::Y, 1e-6));
         }
-    }
-}
-
-#[cfg(test)]
-mod emitter_tests {
-    use super::*;
-
-    fn material(name: &str, ke: Vec3) -> Material {
-        Material {
-            name: name.into(),
-            albedo: Albedo::Color(Vec3::ONE),
-            ka: Vec3::ZERO,
-            kd: Vec3::ONE,
-            ks: Vec3::ZERO,
-            n: 1.0,
-            kt: Vec3::ZERO,
-            ior: 1.0,
-            kr: Vec3::ZERO,
-            ke,
-            lamp: true,
-        }
-    }
-
-    #[test]
-    fn a_lamp_gives_one_light_in_front_of_it_and_a_box_one_per_side() {
-        // A 0.5 x 0.5 lamp at y = 2 facing down, beside a floor of another material.
-        let lamp = shapes::quad(Vec3::new(0.0, 2.0, 0.0), Vec3::X * 0.25, Vec3::Z * 0.25);
-        let floor = shapes::quad(Vec3::ZERO, Vec3::X, Vec3::NEG_Z);
-        let objects = vec![
-            Object {
-                name: "lamp".into(),
-                mesh: lamp,
-                material: 0,
-                face_materials: None,
-            },
-            Object {
-                name: "floor".into(),
-                mesh: floor,
-                material: 1,
-                face_materials: None,
-            },
-        ];
-        let materials = vec![
-            material("lamp", Vec3::new(17.0, 12.0, 4.0)),
-            material("floor", Vec3::ZERO),
-        ];
-        let lights = emitter_lights(&objects, &materials);
-        assert_eq!(lights.len(), 1);
-        let l = lights[0];
-        // Just below the lamp (it faces -y), over its centre.
-        assert!(l.position.x.abs() < 1e-6 && l.position.z.abs() < 1e-6);
-        assert!(l.position.y < 2.0 && l.position.y > 1.99, "{}", l.position);
-        // Ke's ratios, the brightest channel 1.
-        assert!((l.intensity - Vec3::new(1.0, 12.0 / 17.0, 4.0 / 17.0)).length() < 1e-6);
-        // A lamp box: one light per side, outside the box; they sum to a brightest channel of 1.
-        let cube = Object {
-            name: "cube".into(),
-            mesh: shapes::cube(Vec3::ZERO, Vec3::splat(0.5)),
-            material: 0,
-            face_materials: None,
-        };
-        let lights = emitter_lights(&[cube], &materials);
-        assert_eq!(lights.len(), 6);
-        assert!(lights.iter().all(|l| l.position.abs().max_element() > 0.5));
-        let total = lights.iter().map(|l| l.intensity).sum::<Vec3>();
-        assert!((total.max_element() - 1.0).abs() < 1e-5);
-        // Without lamps, nothing (lamp = false also turns a material's lights off).
-        let mut off = materials.clone();
-        off[0].lamp = false;
-        assert!(emitter_lights(&objects, &off).is_empty());
     }
 }

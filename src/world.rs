@@ -96,16 +96,13 @@ pub struct Instanced {
     pub geometries: Vec<Geometry>,
     /// Per instance, the material that replaces its triangles' own.
     pub materials: Vec<Option<u32>>,
-    /// Per instance, the sign of its transform's determinant (a mirroring placement turns
-    /// the geometric normal `cross(v1 - v0, v2 - v0)` around).
-    pub handedness: Vec<f32>,
     /// Wall time of building the meshes' trees and the top level.
     pub build_time: std::time::Duration,
 }
 
-/// A hit's placement as shading reads it: the instance, the material replacing its
-/// triangles' own, the sign of its determinant.
-pub type Placed<'a> = (&'a Instance, Option<u32>, f32);
+/// A hit's placement as shading reads it: the instance and the material replacing its
+/// triangles' own.
+pub type Placed<'a> = (&'a Instance, Option<u32>);
 
 /// The instance lane of a hit that is not through instances.
 pub const NOT_INSTANCED: u32 = u32::MAX;
@@ -156,10 +153,6 @@ impl World {
             .map(|g| Accel::build(&corners(g), BuildQuality::default()))
             .collect();
         let tracer = Instances::new(accels, &placements);
-        let handedness = placements
-            .iter()
-            .map(|(_, m)| m.matrix3.determinant().signum())
-            .collect();
         let eps = 1e-5 * tracer.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length());
         World {
             scene,
@@ -170,7 +163,6 @@ impl World {
                 tracer,
                 geometries,
                 materials,
-                handedness,
                 build_time: start.elapsed(),
             }),
         }
@@ -215,8 +207,7 @@ impl World {
     }
 
     /// The shading data of a hit on instance `inst` ([`NOT_INSTANCED`]: the flattened
-    /// geometry): the triangles it numbers, and the placement with its material and
-    /// handedness.
+    /// geometry): the triangles it numbers, and the placement with its material.
     #[inline]
     pub fn shading(&self, inst: u32) -> (&Geometry, Option<Placed<'_>>) {
         match &self.instanced {
@@ -225,7 +216,7 @@ impl World {
                 let placement = &i.tracer.instances[k];
                 (
                     &i.geometries[placement.mesh as usize],
-                    Some((placement, i.materials[k], i.handedness[k])),
+                    Some((placement, i.materials[k])),
                 )
             }
             _ => (&self.geometry, None),

@@ -168,7 +168,7 @@ fn info_lists_meshes_instances_lights_cameras_and_materials() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(
         v["meshes"],
-        json!([{"index": 0, "name": "square", "primitives": 1, "triangles": 2, "nodes": [0]}])
+        json!([{"index": 0, "name": "square", "primitives": 1, "triangles": 2, "nodes": [0], "instances": 1}])
     );
     assert_eq!(v["instances"], json!(1));
     assert_eq!(

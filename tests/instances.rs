@@ -2,6 +2,11 @@
 
 mod common;
 
+/// The field's writer (`cargo run --example kitten_field -- N OUT.glb`).
+#[path = "../examples/kitten_field.rs"]
+#[allow(dead_code)]
+mod kitten_field;
+
 use glam::{Affine3A, Quat, Vec3};
 use whitted::render::{Engine, Settings, World, render};
 use whitted::scene::{Object, Placement, Scene};
@@ -266,6 +271,50 @@ fn a_million_kittens_render_at_1080p() {
     }
 }
 
+/// The same targets through one GLB (`examples/kitten_field.rs`: the kitten stored once,
+/// drawn by one node's `EXT_mesh_gpu_instancing`), read as `whitted render field.glb`
+/// reads it; the peak memory of that command is measured with
+///
+///     cargo run --release --example kitten_field -- 1000 field.glb
+///     /usr/bin/time -v target/release/whitted render field.glb --width 1920 --height 1080
+#[test]
+#[ignore = "minutes and up to 2 GB: run by hand"]
+fn a_million_kittens_from_one_glb_render_at_1080p() {
+    use whitted::io::mesh_scene::scene_for_mesh;
+    use whitted::io::scene::{SearchPath, build_scene};
+    for n in [100, 1000] {
+        let path = common::scratch("instances", &format!("field{n}.glb"));
+        std::fs::write(&path, kitten_field::glb(n)).unwrap();
+        let start = std::time::Instant::now();
+        let (file, warnings) = scene_for_mesh(&path, 1920, 1080).unwrap();
+        let (scene, more) = build_scene(&file, &path, &SearchPath::for_scene(None)).unwrap();
+        assert!(
+            warnings.is_empty() && more.is_empty(),
+            "{warnings:?} {more:?}"
+        );
+        assert_eq!(scene.instances.len(), (n * n) as usize);
+        assert_eq!(scene.stored_triangle_count(), 20438 + 2);
+        let loaded = start.elapsed();
+        let world = World::new(scene);
+        let i = world.instanced.as_ref().unwrap();
+        // the kitten's placements and the floor, drawn as it is
+        assert_eq!(i.tracer.instances.len(), (n * n) as usize + 1);
+        let (image, stats) = render(&world, &Settings::default(), &|_| ());
+        let lit = image.pixels.iter().filter(|p| p.x > 1.3 * p.z).count();
+        println!(
+            "{} kittens from a GLB ({} triangles): loaded in {:.2} s, BVH {:.2} s, rendered 1920x1080 in {:.2} s ({} rays); {lit} orange pixels",
+            n * n,
+            i.tracer.triangles,
+            loaded.as_secs_f64(),
+            i.build_time.as_secs_f64(),
+            stats.time.as_secs_f64(),
+            stats.rays.total()
+        );
+        assert!(lit > 100_000, "{lit} kitten pixels");
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
 #[test]
 fn info_lists_instances() {
     let path = common::scratch("instances", "field.toml");
@@ -294,26 +343,79 @@ fn info_lists_instances() {
     assert!(text.contains("instances: 2\n"), "{text}");
 }
 
+/// Lamps placed by `[[instance]]` (turned, scaled, mirrored, one in a material of its
+/// own): their lights are those of the scene flattened, and it renders as that scene.
 #[test]
-fn placed_lamps_are_named_in_a_warning() {
-    use whitted::io::scene::{SceneFile, SearchPath, build_scene};
-    let path = std::path::Path::new("field.toml");
-    let text = FIELD.replacen(
-        "color = [0.9, 0.5, 0.2]",
-        "color = [0.9, 0.5, 0.2]\nke = 1",
-        1,
+fn placed_lamps_light_the_scene_as_the_scene_flattened() {
+    let text = format!(
+        "{FIELD}{}",
+        r#"
+[[material]]
+name = "lamp"
+color = [1, 1, 1]
+ke = [6, 5, 4]
+[[material]]
+name = "lamp2"
+color = [1, 1, 1]
+ke = [1, 2, 6]
+[[mesh]]
+name = "lamp"
+shape = "quad"
+size = [0.5, 1, 0.5]
+material = "lamp"
+[[instance]]
+mesh = "lamp"
+translate = [-2, 3, 0]
+rotate = [180, 0, 0]
+[[instance]]
+mesh = "lamp"
+material = "lamp2"
+translate = [2, 3, 1]
+rotate = [180, 0, 0]
+scale = [2, 1, 1]
+[[instance]]
+mesh = "lamp"
+matrix = [[1, 0, 0, 0], [0, -1, 0, 3.5], [0, 0, 1, -1], [0, 0, 0, 1]]
+"#
     );
-    let file = SceneFile::parse(&text, path).unwrap();
-    let search = SearchPath {
-        dirs: vec![common::assets()],
-    };
-    let (scene, warnings) = build_scene(&file, path, &search).unwrap();
+    let scene = build(&text).unwrap();
+    assert_eq!(scene.instances.len(), 5);
+    // the file's light, then one per lamp material facing down
+    assert_eq!(scene.lights.len(), 3, "{:?}", scene.lights);
+    let mut flat = scene.flattened();
+    flat.lights.truncate(1);
+    flat.lights.extend(whitted::scene::emitter_lights(
+        &flat.objects,
+        &flat.materials,
+    ));
+    assert_eq!(flat.lights.len(), 3);
+    for (a, b) in scene.lights.iter().zip(&flat.lights) {
+        assert!(
+            a.position.distance(b.position) < 1e-3,
+            "{a:?} against {b:?}"
+        );
+        assert!(
+            a.intensity.distance(b.intensity) < 1e-5,
+            "{a:?} against {b:?}"
+        );
+    }
+    // below the lamps, facing down
     assert!(
-        warnings
+        scene.lights[1..]
             .iter()
-            .any(|w| w.contains("'kitten'") && w.contains("light nothing")),
-        "{warnings:?}"
+            .all(|l| l.position.y < 3.0 && l.position.y > 2.9)
     );
-    // the one light of the file, none made of the placed kitten's faces
-    assert_eq!(scene.lights.len(), 1);
+    let (mut scene, mut flat) = (scene, flat);
+    for s in [&mut scene, &mut flat] {
+        (s.width, s.height) = (80, 60);
+    }
+    let (wi, mut wf) = (World::new(scene), World::new(flat));
+    wf.eps = wi.eps;
+    let settings = Settings::default();
+    let a = render(&wi, &settings, &|_| ()).0;
+    let b = render(&wf, &settings, &|_| ()).0;
+    let off = (a.pixels.iter().zip(&b.pixels))
+        .filter(|(x, y)| (**x - **y).abs().max_element() > 1e-3)
+        .count();
+    assert!(off <= a.pixels.len() / 200, "{off} pixels differ");
 }

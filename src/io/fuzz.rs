@@ -53,9 +53,16 @@ pub fn gltf(data: &[u8]) -> Result<()> {
 }
 
 /// A model's mesh holds together ([`check_mesh`]) and every face's material is one of its
-/// materials.
+/// materials; so do its shared meshes, whose placements are finite and invertible.
 fn check_model(model: &crate::io::model::Model) {
-    check_mesh(&model.mesh);
+    for s in &model.shared {
+        check_model(&s.model);
+        assert!(s.placements.iter().all(crate::instance::invertible));
+    }
+    // (a model whose meshes are all shared has no mesh of its own)
+    if model.shared.is_empty() || !model.mesh.triangles.is_empty() {
+        check_mesh(&model.mesh);
+    }
     if let Some(f) = &model.face_materials {
         assert_eq!(f.len(), model.mesh.triangles.len());
         assert!(

@@ -18,6 +18,9 @@
 
 mod accessor;
 mod image;
+mod instancing;
+#[cfg(test)]
+mod instancing_tests;
 mod listing;
 mod material;
 mod mesh;
@@ -70,7 +73,8 @@ struct Document {
 }
 
 /// The extensions whitted reads; any other in `extensionsRequired` is refused.
-const READ_EXTENSIONS: [&str; 4] = [
+const READ_EXTENSIONS: [&str; 5] = [
+    "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -100,11 +104,14 @@ struct LightJson {
     intensity: Option<f32>,
 }
 
-/// A node's `extensions`: its `KHR_lights_punctual` light.
+/// A node's `extensions`: its `KHR_lights_punctual` light and its
+/// `EXT_mesh_gpu_instancing` copies of its mesh.
 #[derive(Debug, Default, Deserialize)]
 struct NodeExtensions {
     #[serde(rename = "KHR_lights_punctual")]
     light: Option<NodeLight>,
+    #[serde(rename = "EXT_mesh_gpu_instancing")]
+    gpu_instancing: Option<instancing::GpuInstancing>,
 }
 
 /// `nodes[i].extensions.KHR_lights_punctual`.
@@ -160,8 +167,9 @@ struct MeshJson {
     primitives: Vec<Primitive>,
 }
 
-/// `meshes[i].primitives[j]`.
-#[derive(Debug, Deserialize)]
+/// `meshes[i].primitives[j]` (equal primitives draw the same triangles: meshes whose
+/// primitives are all equal are stored once).
+#[derive(Debug, Deserialize, PartialEq, Eq, Hash)]
 struct Primitive {
     attributes: std::collections::BTreeMap<String, usize>,
     indices: Option<usize>,
@@ -238,12 +246,15 @@ pub fn parse_gltf_model(bytes: &[u8], path: &Path) -> Result<(Model, Vec<String>
     })
 }
 
-/// [`parse_gltf_model`], the mesh alone, and whether its normals are the file's.
+/// [`parse_gltf_model`] as one mesh (every copy of a shared mesh flattened into it, up to
+/// the scene's triangle cap), and whether its normals are the file's.
 pub fn parse_gltf_detail(
     bytes: &[u8],
     path: &Path,
 ) -> Result<(crate::mesh::Mesh, Vec<String>, bool)> {
-    parse_gltf_model(bytes, path).map(|(m, w)| (m.mesh, w, m.file_normals))
+    let (model, w) = parse_gltf_model(bytes, path)?;
+    let model = model.flattened(path, crate::io::scene::schema::MAX_SCENE_TRIANGLES)?;
+    Ok((model.mesh, w, model.file_normals))
 }
 
 /// Reads the file a buffer's `uri` names (relative to the model).

@@ -43,7 +43,6 @@ pub fn is_mesh_file(path: &Path) -> bool {
 pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile, Vec<String>)> {
     let (model, warnings) = load_model(path)?;
     let (lo, hi) = model
-        .mesh
         .bounds()
         .ok_or_else(|| Error::parse(path, 0, "no vertices"))?;
     let centre = (lo + hi) * 0.5;
@@ -66,7 +65,12 @@ pub fn scene_for_mesh(path: &Path, width: u64, height: u64) -> Result<(SceneFile
     // Emitters that some face uses: a library's unused lamp material lights nothing, and must
     // not turn the canonical lights off.
     let mut used = vec![false; model.materials.len()];
-    for &f in model.face_materials.iter().flatten() {
+    let shared = model.shared.iter().map(|s| &s.model.face_materials);
+    for &f in std::iter::once(&model.face_materials)
+        .chain(shared)
+        .flatten()
+        .flatten()
+    {
         if let Some(u) = used.get_mut(f as usize) {
             *u = true;
         }

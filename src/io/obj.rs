@@ -134,8 +134,7 @@ pub fn parse_obj_model(
             material_info,
             face_materials,
             file_normals,
-            camera: None,
-            lights: Vec::new(),
+            ..Default::default()
         },
         warnings,
     ))

@@ -88,16 +88,17 @@ pub fn surface_in(world: &World, ray: &Ray, hit: &Hit, inst: u32) -> Surface {
 #[inline]
 pub fn triangle_material(world: &World, tri: u32, inst: u32) -> u32 {
     match world.shading(inst) {
-        (_, Some((_, Some(m), _))) => m,
+        (_, Some((_, Some(m)))) => m,
         (g, _) => g.tri_material[tri as usize],
     }
 }
 
 /// The vertex normals and the geometric normal of triangle `tri` of instance `inst`, in
 /// world space: through a placement, carried by the inverse transpose of its transform and
-/// normalised (each vertex normal as the flattened scene's would be), the geometric normal
-/// turned around by a mirroring placement (it is `cross(v1 - v0, v2 - v0)` of the placed
-/// corners).
+/// normalised, as the flattened scene's would be ([`crate::mesh::Mesh::transformed`]). A
+/// mirroring placement keeps the front the front (as glTF's mirrored nodes, and as the
+/// engines' back-face test in object space): the geometric normal is the object's carried
+/// over, not `cross(v1 - v0, v2 - v0)` of the placed corners, which turns round.
 #[inline]
 pub fn normals(world: &World, inst: u32, tri: u32) -> ([Vec3; 3], Vec3) {
     let (g, placed) = world.shading(inst);
@@ -105,11 +106,11 @@ pub fn normals(world: &World, inst: u32, tri: u32) -> ([Vec3; 3], Vec3) {
     let ng = g.face_normals[tri as usize];
     match placed {
         None => (v, ng),
-        Some((p, _, hand)) => {
+        Some((p, _)) => {
             let m = p.to_object.matrix3.transpose();
             (
                 v.map(|n| (m * n).normalize_or_zero()),
-                (hand * (m * ng)).normalize_or_zero(),
+                (m * ng).normalize_or_zero(),
             )
         }
     }

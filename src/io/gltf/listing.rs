@@ -9,7 +9,8 @@ use serde_json::{Value, json};
 use std::path::Path;
 
 /// `meshes`, `instances`, `lights` and `cameras` of the glTF or GLB `bytes` at `path`, as
-/// `whitted info` fields. `instances` counts the nodes that name a mesh (each draws one copy).
+/// `whitted info` fields. `instances` counts the copies of meshes the nodes draw: one per
+/// node that names a mesh, or its `EXT_mesh_gpu_instancing` count; each mesh lists its own.
 pub fn listing(bytes: &[u8], path: &Path) -> Result<Vec<(&'static str, Value)>> {
     let (json, _) = if bytes.starts_with(GLB_MAGIC) {
         glb_chunks(bytes, path)?
@@ -38,6 +39,13 @@ pub fn listing(bytes: &[u8], path: &Path) -> Result<Vec<(&'static str, Value)>> 
             .and_then(Value::as_u64)
             .unwrap_or(0)
     };
+    // the copies a node draws: one, or its `EXT_mesh_gpu_instancing` attributes' count
+    let copies = |n: &Value| {
+        n.pointer("/extensions/EXT_mesh_gpu_instancing/attributes")
+            .and_then(Value::as_object)
+            .and_then(|a| a.values().next())
+            .map_or(1, |a| count(a.as_u64()))
+    };
     let meshes: Vec<Value> = list("meshes")
         .iter()
         .enumerate()
@@ -58,16 +66,21 @@ pub fn listing(bytes: &[u8], path: &Path) -> Result<Vec<(&'static str, Value)>> 
             let placed_by: Vec<usize> = (0..nodes.len())
                 .filter(|&n| nodes[n].get("mesh").and_then(Value::as_u64) == Some(i as u64))
                 .collect();
+            let instances: u64 = placed_by.iter().map(|&n| copies(&nodes[n])).sum();
             json!({
                 "index": i,
                 "name": name(m),
                 "primitives": prims.len(),
                 "triangles": triangles,
                 "nodes": placed_by,
+                "instances": instances,
             })
         })
         .collect();
-    let instances = nodes.iter().filter(|n| n.get("mesh").is_some()).count();
+    let instances: u64 = (nodes.iter())
+        .filter(|n| n.get("mesh").is_some())
+        .map(copies)
+        .sum();
     let lights: Vec<Value> = doc
         .pointer("/extensions/KHR_lights_punctual/lights")
         .and_then(Value::as_array)

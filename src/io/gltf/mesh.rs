@@ -1,116 +1,187 @@
-//! A glTF document's scene flattened into one [`Model`]: node transforms applied, every
-//! primitive's triangles appended with its material, accessors read after their bounds are
+//! A glTF document's scene as one [`Model`]: the meshes drawn once flattened into its mesh
+//! (node transforms applied, every primitive's triangles appended with its material), the
+//! meshes drawn more than once read once in their own space with their placements
+//! ([`Model::shared`], decided in `instancing.rs`); accessors read after their bounds are
 //! checked.
 
 use super::accessor::{View, view};
+use super::instancing::{Draw, Use, draws};
 use super::material::materials;
 use super::view::{lights, view_of};
 use super::{Document, Node, Primitive, at};
 use crate::error::Result;
-use crate::io::model::{Model, NO_MATERIAL};
-use crate::io::scene::schema::MAX_SCENE_TRIANGLES;
+use crate::io::model::{Model, NO_MATERIAL, Shared};
+use crate::io::scene::schema::{MAX_SCENE_TRIANGLES, MaterialDesc};
 use crate::mesh::Mesh;
-use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
+use glam::{Affine3A, Mat4, Quat, Vec2, Vec3};
 use std::borrow::Cow;
 use std::path::Path;
 
-/// Most vertices the scene's instances may copy together: three per triangle of the cap.
-const MAX_INSTANCED_VERTICES: u64 = 3 * MAX_SCENE_TRIANGLES;
+/// Most vertices the model's meshes may store together: three per triangle of the cap.
+const MAX_STORED_VERTICES: u64 = 3 * MAX_SCENE_TRIANGLES;
 
-/// The model of `doc`'s default scene.
+/// The model of `doc`'s default scene: meshes drawn once flattened into `mesh`, the others
+/// stored once with their placements (`shared`).
 pub(super) fn build(
     doc: &Document,
     buffers: &[Cow<'_, [u8]>],
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<Model> {
-    let (instances, camera, light_nodes) = instances(doc, path)?;
+    let (uses, camera, light_nodes) = instances(doc, path)?;
     let camera = camera.and_then(|(world, c)| view_of(doc, world, c, path, warnings));
-    // The caps first: every instance of a mesh repeats its triangles.
+    let draws = draws(doc, buffers, &uses, path, warnings)?;
+    // The caps first: every flattened mesh and every shared one once.
     let (mut planned, mut planned_vertices) = (0u64, 0u64);
-    for &(_, m) in &instances {
-        let mesh = doc
-            .meshes
-            .get(m)
-            .ok_or_else(|| at(path, "nodes[].mesh", format!("no mesh {m}")))?;
-        for (p, prim) in mesh.primitives.iter().enumerate() {
-            // The accessor that counts the triangles, checked against its buffer first (so a
-            // count no buffer holds is named as such, not as the cap).
-            let key = format!("meshes[{m}].primitives[{p}]");
-            let n = match (prim.indices, prim.attributes.get("POSITION")) {
-                (Some(i), _) => {
-                    let kinds = [5121, 5123, 5125];
-                    view(
-                        doc,
-                        buffers,
-                        i,
-                        &["SCALAR"],
-                        &kinds,
-                        &format!("{key}.indices"),
-                        path,
-                    )?
-                    .count as u64
-                        / 3
-                }
-                (None, Some(&i)) => {
-                    let used_as = format!("{key}.attributes.POSITION");
-                    view(doc, buffers, i, &["VEC3"], &[5126], &used_as, path)?.count as u64 / 3
-                }
-                (None, None) => 0,
-            };
-            planned = planned.saturating_add(n);
-            if planned > MAX_SCENE_TRIANGLES {
-                return Err(at(
-                    path,
-                    &key,
-                    format!(
-                        "the scene's instances add up to over {MAX_SCENE_TRIANGLES} triangles (the cap)"
-                    ),
-                ));
+    for d in &draws {
+        let (Draw::Flat(_, m) | Draw::Shared(m, _)) = *d;
+        stored(doc, buffers, m, path, &mut planned, &mut planned_vertices)?;
+    }
+    let mut flat = Gather::default();
+    let mut shared = Vec::new();
+    for d in draws {
+        match d {
+            Draw::Flat(world, m) => {
+                let world = Affine3A::from_mat4(world);
+                flat.add(doc, buffers, m, Some(&world), path)?;
             }
-            // Every instance copies the primitive's positions too, used by its indices or
-            // not: a few triangles over millions of vertices, drawn by many nodes, must not
-            // fill the memory either.
-            let vertices = match prim.attributes.get("POSITION") {
-                Some(&i) => {
-                    let used_as = format!("{key}.attributes.POSITION");
-                    view(doc, buffers, i, &["VEC3"], &[5126], &used_as, path)?.count as u64
-                }
-                None => 0,
-            };
-            planned_vertices = planned_vertices.saturating_add(vertices);
-            if planned_vertices > MAX_INSTANCED_VERTICES {
-                return Err(at(
-                    path,
-                    &key,
-                    format!(
-                        "the scene's instances add up to over {MAX_INSTANCED_VERTICES} vertices (the cap)"
-                    ),
-                ));
+            Draw::Shared(m, placements) => {
+                let mut g = Gather::default();
+                g.add(doc, buffers, m, None, path)?;
+                shared.push((m, g, placements));
             }
         }
     }
-    let mut out = Mesh::default();
-    let (mut uvs, mut colors) = (Vec::new(), Vec::new());
-    let (mut all_uv, mut all_color, mut all_normals) = (true, true, true);
-    let mut face_materials = Vec::new();
-    for &(world, m) in &instances {
+    // (a mesh without primitives, or whose copies are all left out, draws nothing)
+    shared.retain(|(_, g, p): &(usize, Gather, Vec<Affine3A>)| {
+        !(g.mesh.triangles.is_empty() || p.is_empty())
+    });
+    if flat.mesh.triangles.is_empty() && shared.is_empty() {
+        return Err(at(path, "scenes", "no triangles in the scene's nodes"));
+    }
+    let all_uv = flat.all_uv && shared.iter().all(|(_, g, _)| g.all_uv);
+    let all_color = flat.all_color && shared.iter().all(|(_, g, _)| g.all_color);
+    let degenerate = flat.mesh.degenerate_count()
+        + (shared.iter())
+            .map(|(_, g, _)| g.mesh.degenerate_count())
+            .sum::<usize>();
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
+            path.display()
+        ));
+    }
+    let materials = materials(doc, path, all_uv, all_color, warnings)?;
+    let shared = shared
+        .into_iter()
+        .map(|(m, g, placements)| Shared {
+            name: format!("meshes[{m}]"),
+            model: g.model(materials.clone()),
+            placements,
+        })
+        .collect();
+    let mut model = flat.model(materials);
+    model.shared = shared;
+    model.camera = camera;
+    model.lights = lights(doc, &light_nodes, model.bounds(), path, warnings)?;
+    Ok(model)
+}
+
+/// Mesh `m`'s triangles and vertices added to the totals stored, against the caps; each
+/// accessor is checked against its buffer first (so a count no buffer holds is named as
+/// such, not as the cap).
+fn stored(
+    doc: &Document,
+    buffers: &[Cow<'_, [u8]>],
+    m: usize,
+    path: &Path,
+    planned: &mut u64,
+    planned_vertices: &mut u64,
+) -> Result<()> {
+    for (p, prim) in doc.meshes[m].primitives.iter().enumerate() {
+        let key = format!("meshes[{m}].primitives[{p}]");
+        let positions = match prim.attributes.get("POSITION") {
+            Some(&i) => {
+                let used_as = format!("{key}.attributes.POSITION");
+                view(doc, buffers, i, &["VEC3"], &[5126], &used_as, path)?.count as u64
+            }
+            None => 0,
+        };
+        let n = match prim.indices {
+            Some(i) => {
+                let used_as = format!("{key}.indices");
+                let kinds = [5121, 5123, 5125];
+                view(doc, buffers, i, &["SCALAR"], &kinds, &used_as, path)?.count as u64 / 3
+            }
+            None => positions / 3,
+        };
+        *planned = planned.saturating_add(n);
+        if *planned > MAX_SCENE_TRIANGLES {
+            return Err(at(
+                path,
+                &key,
+                format!(
+                    "the scene's meshes add up to over {MAX_SCENE_TRIANGLES} triangles (the cap)"
+                ),
+            ));
+        }
+        // Positions count too, used by the indices or not: a few triangles over millions of
+        // vertices, drawn by many nodes, must not fill the memory either.
+        *planned_vertices = planned_vertices.saturating_add(positions);
+        if *planned_vertices > MAX_STORED_VERTICES {
+            return Err(at(
+                path,
+                &key,
+                format!(
+                    "the scene's meshes add up to over {MAX_STORED_VERTICES} vertices (the cap)"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Primitives gathered into one mesh with their materials.
+struct Gather {
+    /// Their triangles (attributes kept where every primitive has them).
+    mesh: Mesh,
+    /// Per triangle, its glTF material or [`NO_MATERIAL`].
+    face_materials: Vec<u32>,
+    /// Whether every primitive has uv, colours, normals of the file's.
+    all_uv: bool,
+    all_color: bool,
+    all_normals: bool,
+}
+
+impl Default for Gather {
+    fn default() -> Gather {
+        Gather {
+            mesh: Mesh::default(),
+            face_materials: Vec::new(),
+            all_uv: true,
+            all_color: true,
+            all_normals: true,
+        }
+    }
+}
+
+impl Gather {
+    /// Every primitive of mesh `m`, carried by `world` (`None`: in the mesh's own space).
+    fn add(
+        &mut self,
+        doc: &Document,
+        buffers: &[Cow<'_, [u8]>],
+        m: usize,
+        world: Option<&Affine3A>,
+        path: &Path,
+    ) -> Result<()> {
         for (p, prim) in doc.meshes[m].primitives.iter().enumerate() {
             let key = format!("meshes[{m}].primitives[{p}]");
             let part = primitive(doc, buffers, prim, &key, world, path)?;
-            all_uv &= part.uvs.is_some();
-            all_color &= part.colors.is_some();
-            all_normals &= part.file_normals;
-            let base = out.positions.len() as u32;
-            let n = part.mesh.positions.len();
-            out.positions.extend(&part.mesh.positions);
-            out.normals
-                .get_or_insert_with(Vec::new)
-                .extend(part.mesh.normals.as_deref().unwrap_or_default());
-            uvs.extend(part.uvs.unwrap_or_else(|| vec![Vec2::ZERO; n]));
-            colors.extend(part.colors.unwrap_or_else(|| vec![Vec3::ONE; n]));
-            out.triangles
-                .extend(part.mesh.triangles.iter().map(|t| t.map(|v| v + base)));
+            self.all_uv &= part.mesh.uvs.is_some();
+            self.all_color &= part.mesh.colors.is_some();
+            self.all_normals &= part.file_normals;
+            self.mesh.append(&part.mesh);
             let material = match prim.material {
                 Some(k) if k < doc.materials.len() => k as u32,
                 Some(k) => {
@@ -122,48 +193,30 @@ pub(super) fn build(
                 }
                 None => NO_MATERIAL,
             };
-            face_materials.extend(std::iter::repeat_n(material, part.mesh.triangles.len()));
+            let n = part.mesh.triangles.len();
+            self.face_materials.extend(std::iter::repeat_n(material, n));
+        }
+        Ok(())
+    }
+
+    /// The gathered mesh as a model with `materials`.
+    fn model(self, materials: Vec<MaterialDesc>) -> Model {
+        let any_material = self.face_materials.iter().any(|&m| m != NO_MATERIAL);
+        Model {
+            mesh: self.mesh,
+            materials,
+            face_materials: any_material.then_some(self.face_materials),
+            file_normals: self.all_normals,
+            ..Default::default()
         }
     }
-    if out.triangles.is_empty() {
-        return Err(at(path, "scenes", "no triangles in the scene's nodes"));
-    }
-    if all_uv {
-        out.uvs = Some(uvs);
-    }
-    if all_color {
-        out.colors = Some(colors);
-    }
-    let degenerate = out.degenerate_count();
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}: {degenerate} degenerate (zero-area) faces; they are never hit",
-            path.display()
-        ));
-    }
-    let materials = materials(doc, path, all_uv, all_color, warnings)?;
-    let lights = lights(doc, &light_nodes, &out, path, warnings)?;
-    let any_material = face_materials.iter().any(|&m| m != NO_MATERIAL);
-    Ok(Model {
-        mesh: out,
-        materials,
-        material_info: Vec::new(),
-        face_materials: any_material.then_some(face_materials),
-        file_normals: all_normals,
-        camera,
-        lights,
-    })
 }
 
-/// The instances of a scene: every (world transform, mesh), the first (world transform,
-/// camera) met, and every (world transform, light).
-type Instances = (
-    Vec<(Mat4, usize)>,
-    Option<(Mat4, usize)>,
-    Vec<(Mat4, usize)>,
-);
+/// The instances of a scene: every (world transform, mesh, node), the first (world
+/// transform, camera) met, and every (world transform, light).
+type Instances = (Vec<Use>, Option<(Mat4, usize)>, Vec<(Mat4, usize)>);
 
-/// Every (world transform, mesh) of the default scene's node trees, in depth-first order,
+/// Every (world transform, mesh, node) of the default scene's node trees, in depth-first order,
 /// and the first node with a camera. A node met twice (a cycle, or a node with two parents)
 /// is an error.
 fn instances(doc: &Document, path: &Path) -> Result<Instances> {
@@ -221,7 +274,7 @@ fn instances(doc: &Document, path: &Path) -> Result<Instances> {
                     format!("no mesh {m}"),
                 ));
             }
-            out.push((world, m));
+            out.push((world, m, i));
         }
         if let Some(c) = node.camera {
             if c >= doc.cameras.len() {
@@ -263,7 +316,15 @@ fn local(node: &Node, i: usize, path: &Path) -> Result<Mat4> {
                     "given with translation, rotation or scale",
                 ));
             }
-            Mat4::from_cols_array(&m)
+            let m = Mat4::from_cols_array(&m);
+            if m.row(3) != glam::Vec4::W {
+                return Err(at(
+                    path,
+                    &format!("{key}.matrix"),
+                    "its last row is not [0, 0, 0, 1] (glTF node matrices are affine)",
+                ));
+            }
+            m
         }
         None => {
             let q = node.rotation.map_or(Quat::IDENTITY, Quat::from_array);
@@ -287,25 +348,22 @@ fn local(node: &Node, i: usize, path: &Path) -> Result<Mat4> {
     Ok(m)
 }
 
-/// One primitive's triangles in world space.
+/// One primitive's triangles.
 struct Part {
-    /// Positions, triangles and normals (the file's, else flat).
+    /// Positions, triangles, normals (the file's, else flat), `TEXCOORD_0` (v flipped to
+    /// whitted's bottom-up convention) and `COLOR_0` (alpha dropped).
     mesh: Mesh,
-    /// `TEXCOORD_0`, v flipped to whitted's bottom-up convention.
-    uvs: Option<Vec<Vec2>>,
-    /// `COLOR_0` (alpha dropped).
-    colors: Option<Vec<Vec3>>,
     /// Whether the normals are the file's.
     file_normals: bool,
 }
 
-/// Primitive `key` of a mesh, transformed by `world`.
+/// Primitive `key` of a mesh, carried by `world` (`None`: in the mesh's own space).
 fn primitive(
     doc: &Document,
     buffers: &[Cow<'_, [u8]>],
     prim: &Primitive,
     key: &str,
-    world: Mat4,
+    world: Option<&Affine3A>,
     path: &Path,
 ) -> Result<Part> {
     if prim.mode != 4 {
@@ -338,16 +396,18 @@ fn primitive(
         path,
     )?;
     let n = pos.count;
+    let not_finite = |i: usize, k: usize| {
+        at(
+            path,
+            &format!("accessors[{i}]"),
+            format!("element {k} is not finite (after its node's transform)"),
+        )
+    };
     let mut positions = Vec::with_capacity(n);
     for k in 0..n {
-        let p =
-            world.transform_point3(Vec3::new(pos.float(k, 0), pos.float(k, 1), pos.float(k, 2)));
+        let p = Vec3::new(pos.float(k, 0), pos.float(k, 1), pos.float(k, 2));
         if !p.is_finite() {
-            return Err(at(
-                path,
-                &format!("accessors[{pos_i}]"),
-                format!("element {k} is not finite (after its node's transform)"),
-            ));
+            return Err(not_finite(pos_i, k));
         }
         positions.push(p);
     }
@@ -405,13 +465,6 @@ fn primitive(
                 ));
             }
             triangles.extend((0..n as u32 / 3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]));
-        }
-    }
-    // A mirroring transform turns counter-clockwise faces clockwise: swap two corners so the
-    // front stays the front.
-    if world.determinant() < 0.0 {
-        for t in &mut triangles {
-            t.swap(1, 2);
         }
     }
     let mut mesh = Mesh {
@@ -475,14 +528,9 @@ fn primitive(
         Some(i) => {
             let v = view(doc, buffers, i, &["VEC3"], &[5126], &use_as("NORMAL"), path)?;
             same_count(&v, "NORMAL", i)?;
-            let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-            let sign = if world.determinant() < 0.0 { -1.0 } else { 1.0 };
             mesh.normals = Some(
                 (0..n)
-                    .map(|k| {
-                        sign * normal_matrix
-                            * Vec3::new(v.float(k, 0), v.float(k, 1), v.float(k, 2))
-                    })
+                    .map(|k| Vec3::new(v.float(k, 0), v.float(k, 1), v.float(k, 2)))
                     .collect(),
             );
             true
@@ -497,10 +545,13 @@ fn primitive(
     if !file_normals {
         mesh = mesh.flat_shaded();
     }
-    Ok(Part {
-        uvs: mesh.uvs.take(),
-        colors: mesh.colors.take(),
-        mesh,
-        file_normals,
-    })
+    // A mirroring transform swaps two corners of each triangle, so the front stays the front
+    // (glTF: a negative determinant turns the winding).
+    if let Some(world) = world {
+        mesh = mesh.transformed(world);
+        if let Some(k) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(not_finite(pos_i, k));
+        }
+    }
+    Ok(Part { mesh, file_normals })
 }

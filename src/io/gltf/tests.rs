@@ -67,7 +67,7 @@ pub(super) fn glb(d: &Value, bin: &[u8]) -> Vec<u8> {
 }
 
 /// `d` as `.gltf` text with `bin` in a base64 data URI.
-fn embedded(mut d: Value, bin: &[u8]) -> Vec<u8> {
+pub(super) fn embedded(mut d: Value, bin: &[u8]) -> Vec<u8> {
     const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut b64 = String::new();
     for c in bin.chunks(3) {
@@ -115,7 +115,7 @@ fn glb_and_data_uri_read_the_same_flat_mesh() {
 }
 
 /// Two nodes share one mesh: a translated child and a mirrored one (`matrix`, scale -1 in
-/// x); the mirror keeps the triangle facing +z by swapping two corners.
+/// x); flattened, the mirror keeps the triangle facing +z by swapping two corners.
 #[test]
 fn node_transforms_are_flattened() {
     let (mut d, bin) = doc(&TRI, None);
@@ -125,6 +125,9 @@ fn node_transforms_are_flattened() {
         {"mesh": 0, "matrix": [-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]},
     ]);
     let (m, _) = parse(&glb(&d, &bin)).unwrap();
+    // (a mesh drawn twice is stored once: flattened here to look at its copies)
+    assert_eq!((m.shared.len(), m.mesh.triangles.len()), (1, 0));
+    let m = m.flattened(Path::new("t.gltf"), 2).unwrap();
     let mesh = &m.mesh;
     assert_eq!(mesh.triangles.len(), 2);
     let corners = |t: usize| mesh.triangles[t].map(|v| mesh.positions[v as usize]);
@@ -281,19 +284,30 @@ fn errors_name_the_json_path() {
             "{want:?}: {e}"
         );
     }
-    // Instances are counted before any is copied: 200 nodes drawing one triangle over
-    // 600,000 vertices would copy 120M vertices, over the cap (3 x 2^25).
+    // Meshes are counted before any is copied: 200 meshes (each its own material) drawing
+    // one triangle over the same 600,000 vertices would copy 120M vertices, over the cap
+    // (3 x 2^25).
     let many = vec![0.0f32; 600_000 * 3];
     let (mut d, bin) = doc(&many, Some(&[0, 1, 2]));
     d["scenes"][0]["nodes"] = json!((0..200).collect::<Vec<_>>());
-    d["nodes"] = json!(vec![json!({"mesh": 0}); 200]);
+    d["nodes"] = json!((0..200).map(|k| json!({"mesh": k})).collect::<Vec<_>>());
+    d["meshes"] = json!(
+        (0..200)
+            .map(|k| json!({"primitives": [
+                {"attributes": {"POSITION": 0}, "indices": 1, "material": k}
+            ]}))
+            .collect::<Vec<_>>()
+    );
     let e = err(&glb(&d, &bin));
     assert!(
-        e.contains(
-            "glTF meshes[0].primitives[0]: the scene's instances add up to over 100663296 vertices"
-        ),
+        e.contains("primitives[0]: the scene's meshes add up to over 100663296 vertices"),
         "{e}"
     );
+    // Drawn by 200 nodes, the one mesh is stored once.
+    d["nodes"] = json!(vec![json!({"mesh": 0}); 200]);
+    d["meshes"] = json!([{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}]);
+    let (m, _) = parse(&glb(&d, &bin)).unwrap();
+    assert_eq!((m.shared.len(), m.shared[0].placements.len()), (1, 200));
     // An index out of range names the accessor and the element.
     let (d, bin) = doc(&SQUARE, Some(&[0, 1, 2, 0, 2, 9]));
     let e = err(&glb(&d, &bin));

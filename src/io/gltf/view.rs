@@ -4,11 +4,11 @@
 use super::{Document, at};
 use crate::error::Result;
 use crate::io::scene::schema::{CameraDesc, LightDesc};
-use crate::mesh::Mesh;
 use glam::{Mat4, Vec3};
 use std::path::Path;
 
-/// The `KHR_lights_punctual` lights of the scene's nodes as point lights. glTF lights fall
+/// The `KHR_lights_punctual` lights of the scene's nodes as point lights, for a model within
+/// `bounds`. glTF lights fall
 /// off with the square of the distance and whitted's do not, so each light's `Ip` is its
 /// colour times its intensity over its squared distance to the model's centre (directional
 /// lights: times their intensity, placed 10 radii from the centre against their direction;
@@ -18,14 +18,14 @@ use std::path::Path;
 pub(super) fn lights(
     doc: &Document,
     nodes: &[(Mat4, usize)],
-    mesh: &Mesh,
+    bounds: Option<(Vec3, Vec3)>,
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<LightDesc>> {
     let Some(list) = doc.extensions.as_ref().and_then(|e| e.lights.as_ref()) else {
         return Ok(Vec::new());
     };
-    let (lo, hi) = mesh.bounds().unwrap_or_default();
+    let (lo, hi) = bounds.unwrap_or_default();
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-6);
     let mut out = Vec::with_capacity(nodes.len());

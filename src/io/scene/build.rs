@@ -98,40 +98,31 @@ fn build_scene_at(
     b.scene_materials()?;
     b.check_planned()?;
     let mut objects = Vec::with_capacity(file.meshes.len());
+    let mut shared = Vec::new();
     for (i, d) in file.meshes.iter().enumerate() {
-        objects.push(b.object(i, d)?);
+        let (object, parts) = b.object(i, d)?;
+        objects.push(object);
+        shared.extend(parts.into_iter().map(|(o, p)| (i, o, p)));
     }
 
     let instances = super::instances::placements(file, path, &objects, &b.materials)?;
+    // The meshes files store once (glTF), placed where their entry is.
+    let instances = super::instances::with_shared(instances, &mut objects, shared);
 
-    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own
-    // (of the objects drawn as they are: a placed mesh's lamps are not made lights).
-    let mut placed = vec![false; objects.len()];
-    for p in &instances {
-        placed[p.object] = true;
+    // Emitting materials (`ke`, `lamp`) light the scene through point lights of their own,
+    // at every placement of a placed lamp.
+    let placed_lamps = crate::scene::placed_lamp_triangles(&objects, &instances, &b.materials);
+    if placed_lamps > crate::scene::MAX_PLACED_LAMP_TRIANGLES {
+        b.warnings.push(format!(
+            "the placed meshes draw {placed_lamps} emitting triangles, over the {} that are made lights: placed lamps show `ke` but light nothing",
+            crate::scene::MAX_PLACED_LAMP_TRIANGLES
+        ));
     }
-    if instances.is_empty() {
-        lights.extend(crate::scene::emitter_lights(&objects, &b.materials));
-    } else {
-        for (o, _) in objects.iter().zip(&placed).filter(|(_, p)| **p) {
-            let lamp = |m: usize| b.materials[m].lamp && b.materials[m].emits();
-            let emits = match &o.face_materials {
-                Some(f) => f.iter().any(|&m| lamp(m as usize)),
-                None => lamp(o.material),
-            };
-            if emits {
-                b.warnings.push(format!(
-                    "mesh '{}' is placed by [[instance]]: its emitting faces show `ke` but light nothing (lamps are made lights only on meshes drawn as they are)",
-                    o.name
-                ));
-            }
-        }
-        let own: Vec<Object> = (objects.iter().zip(&placed))
-            .filter(|(_, p)| !**p)
-            .map(|(o, _)| o.clone())
-            .collect();
-        lights.extend(crate::scene::emitter_lights(&own, &b.materials));
-    }
+    lights.extend(crate::scene::emitter_lights_placed(
+        &objects,
+        &instances,
+        &b.materials,
+    ));
 
     let scene = Scene {
         width,
@@ -249,6 +240,10 @@ pub(super) fn referenced(
     }
 }
 
+/// A mesh a file stores once ([`Model::shared`]) as a scene object, with its placements
+/// (object to world, before its entry's own placements).
+pub(super) type SharedObject = (Object, Vec<glam::Affine3A>);
+
 /// A mesh file as read once for a scene: where it was found, the mesh with the materials it
 /// brings, the vertices it gave no rgb.
 pub(super) type LoadedMesh = (PathBuf, Model, Vec<u32>);
@@ -337,17 +332,40 @@ impl Builder<'_> {
     }
 
     /// The object of mesh entry `i`: its mesh (read, copied or generated, then subdivided)
-    /// and its material, or a material per triangle from its file.
-    fn object(&mut self, i: usize, d: &MeshDesc) -> Result<Object> {
+    /// and its material, or a material per triangle from its file; and the objects of the
+    /// meshes its file stores once ([`Model::shared`]) with their placements.
+    fn object(&mut self, i: usize, d: &MeshDesc) -> Result<(Object, Vec<SharedObject>)> {
         let named = self.named_material(i, d)?;
-        let (model, name, missing_rgb) = self.mesh_of(d, i)?;
+        let (mut model, name, missing_rgb) = self.mesh_of(d, i)?;
+        let mut parts = Vec::with_capacity(model.shared.len());
+        for s in std::mem::take(&mut model.shared) {
+            self.caps(i, d, s.model.mesh.triangles.len() as u64)?;
+            let part_name = format!("{name}#{}", s.name);
+            let object = self.object_of(i, d, named, s.model, part_name, &[])?;
+            parts.push((object, s.placements));
+        }
+        let object = self.object_of(i, d, named, model, name, &missing_rgb)?;
+        Ok((object, parts))
+    }
+
+    /// The object of `model` for mesh entry `i`, its material `named` by the entry or the
+    /// model's own.
+    fn object_of(
+        &mut self,
+        i: usize,
+        d: &MeshDesc,
+        named: Option<usize>,
+        model: Model,
+        name: String,
+        missing_rgb: &[u32],
+    ) -> Result<Object> {
         let file_normals = model.file_normals;
         let (material, face_materials) = match named {
             Some(m) => (m, None),
             None => self.file_materials(&model, &name, i)?,
         };
         let mut mesh = model.mesh;
-        self.fill_missing_rgb(&mut mesh, material, &missing_rgb);
+        self.fill_missing_rgb(&mut mesh, material, missing_rgb);
         let mesh = self.shade(i, d, mesh, file_normals)?;
         let mesh = if d.subdivide > 0 {
             mesh.subdivide(d.subdivide)
@@ -465,6 +483,8 @@ impl Builder<'_> {
     fn check_albedo_source(&self, mesh: &Mesh, material: usize, key: &str) -> Result<()> {
         let material = &self.materials[material];
         let missing = match &material.albedo {
+            // (a file whose meshes are all stored once leaves its entry's own mesh empty)
+            _ if mesh.triangles.is_empty() => return Ok(()),
             Albedo::VertexColor if mesh.colors.is_none() => {
                 "uses vertex colours but the mesh has no rgb"
             }

@@ -4,7 +4,7 @@
 use super::schema::{InstanceDesc, ScaleDesc, SceneFile};
 use crate::error::{Error, Result};
 use crate::scene::{Material, Object, Placement};
-use glam::{Affine3A, DMat3, EulerRot, Mat3, Quat, Vec3};
+use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -94,15 +94,7 @@ fn placement(
     } else {
         "scale"
     };
-    let m = DMat3::from_cols_array(&to_world.matrix3.to_cols_array().map(f64::from));
-    let det = m.determinant();
-    // singular, or so near it that the inverse leaves f32
-    let inverse_finite = det != 0.0
-        && m.inverse()
-            .to_cols_array()
-            .iter()
-            .all(|x| (*x as f32).is_finite());
-    if !inverse_finite {
+    if !crate::instance::invertible(&to_world) {
         return Err(fail(
             key,
             "the transform is singular (it has no inverse)".into(),
@@ -113,6 +105,39 @@ fn placement(
         to_world,
         material,
     })
+}
+
+/// `instances` with the placements of the meshes files store once: each shared object
+/// (appended to `objects`) at its own placements, or, when `[[instance]]` places its entry,
+/// at each of those placements times its own (in the instance's material).
+pub(super) fn with_shared(
+    mut instances: Vec<Placement>,
+    objects: &mut Vec<Object>,
+    shared: Vec<(usize, Object, Vec<Affine3A>)>,
+) -> Vec<Placement> {
+    let own = instances.len();
+    for (entry, object, placements) in shared {
+        let k = objects.len();
+        objects.push(object);
+        let parents: Vec<(Affine3A, Option<usize>)> = (instances[..own].iter())
+            .filter(|p| p.object == entry)
+            .map(|p| (p.to_world, p.material))
+            .collect();
+        let parents = if parents.is_empty() {
+            vec![(Affine3A::IDENTITY, None)]
+        } else {
+            parents
+        };
+        instances.reserve(parents.len() * placements.len());
+        for (parent, material) in parents {
+            instances.extend(placements.iter().map(|&m| Placement {
+                object: k,
+                to_world: parent * m,
+                material,
+            }));
+        }
+    }
+    instances
 }
 
 /// Three numbers of key `k`, each finite.

@@ -78,7 +78,7 @@ pub(super) fn check_caps(
 impl Builder<'_> {
     /// Whether entry `i` with `n` triangles (before its subdivision) fits the caps, given
     /// the meshes made so far; called before its mesh is copied or generated.
-    fn caps(&self, i: usize, d: &MeshDesc, n: u64) -> Result<u64> {
+    pub(super) fn caps(&self, i: usize, d: &MeshDesc, n: u64) -> Result<u64> {
         check_caps(
             i,
             d,

@@ -1,5 +1,5 @@
 //! The TOML scene format, by concern: the schema ([`schema`]: what a file may say, its
-//! defaults and caps), reading the text ([`text`]), `-D` overrides ([`overrides`]), the
+//! defaults and caps), reading the text ([`text`], its `[[instance]]` tables one at a time), `-D` overrides ([`overrides`]), the
 //! search path for the files a scene names ([`search`]), and building a
 //! [`Scene`](crate::scene::Scene) from it ([`build`], with its materials and meshes).
 //!
@@ -10,6 +10,7 @@
 //! builder depends on the loaders.
 
 pub mod build;
+mod instance_text;
 mod instances;
 mod materials;
 pub mod meshes;
@@ -23,6 +24,7 @@ pub use meshes::SPHERE_SEGMENTS;
 pub use overrides::{name_overrides, overrides_named};
 pub use schema::*;
 pub use search::{PROJECT_DATA, SearchPath};
+pub use text::KeyLines;
 
 #[cfg(test)]
 mod tests;

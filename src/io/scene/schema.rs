@@ -2,6 +2,7 @@
 //! defaults and the caps a scene is checked against. Loaders use [`MaterialDesc`] and
 //! [`Coef`] to describe the materials their files bring; nothing here reads a file.
 
+use super::text::KeyLines;
 use crate::texture::Wrap;
 use serde::{Deserialize, Serialize};
 
@@ -55,62 +56,6 @@ pub struct SceneFile {
     /// Lines of the keys in the text this was parsed from (empty for scenes made in code).
     #[serde(skip)]
     pub lines: KeyLines,
-}
-
-/// The 1-based line of each key of a scene file's text, by its path (`background.cubemap`,
-/// `mesh[1].file`), so that errors about the files a key names can point at the key. Source
-/// positions are not part of a scene's value: any two `KeyLines` compare equal.
-#[derive(Clone, Debug, Default)]
-pub struct KeyLines(pub(super) Vec<(String, usize)>);
-
-impl PartialEq for KeyLines {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl KeyLines {
-    /// Read the key positions of TOML text (empty when it does not parse).
-    pub fn of(text: &str) -> KeyLines {
-        use toml::de::{DeTable, DeValue};
-        let mut out = Vec::new();
-        let Ok(doc) = DeTable::parse(text) else {
-            return KeyLines(out);
-        };
-        // Newline offsets, found once: a line is a binary search (a scene of thousands of
-        // entries would otherwise rescan its text per key).
-        let newlines: Vec<usize> = text
-            .bytes()
-            .enumerate()
-            .filter_map(|(i, b)| (b == b'\n').then_some(i))
-            .collect();
-        let line = |at: usize| newlines.partition_point(|&n| n < at) + 1;
-        let table = |prefix: String, t: &DeTable, out: &mut Vec<(String, usize)>| {
-            for (k, _) in t.iter() {
-                out.push((format!("{prefix}.{}", k.get_ref()), line(k.span().start)));
-            }
-        };
-        for (k, v) in doc.get_ref().iter() {
-            let name = k.get_ref().to_string();
-            match v.get_ref() {
-                DeValue::Table(t) => table(name, t, &mut out),
-                DeValue::Array(items) => {
-                    for (i, item) in items.into_iter().enumerate() {
-                        if let DeValue::Table(t) = item.get_ref() {
-                            table(format!("{name}[{i}]"), t, &mut out);
-                        }
-                    }
-                }
-                _ => out.push((name, line(k.span().start))),
-            }
-        }
-        KeyLines(out)
-    }
-
-    /// The line of `key` (as `mesh[1].file`), if the text had it.
-    pub fn line(&self, key: &str) -> Option<usize> {
-        self.0.iter().find(|(k, _)| k == key).map(|&(_, l)| l)
-    }
 }
 
 /// `[image]`.

@@ -248,3 +248,54 @@ fn bad_crease_keys_name_the_key_and_line() {
         assert!(e.contains(want), "{keys}: {e}");
     }
 }
+
+/// `[[instance]]` tables are read one at a time (`instance_text.rs`): the same scene as the
+/// TOML parser reads whole, the same lines for their keys, errors on the right line; a
+/// multi-line matrix whose rows begin lines is no table header.
+#[test]
+fn instance_tables_read_alone_are_the_whole_parse() {
+    let text = format!(
+        "{MINIMAL}name = \"tri\"\n\n[[instance]] # the first\nmesh = \"tri\"\ntranslate = [1, 2, 3]\n\
+         [render]\ndepth = 2\n  [[ instance ]]\nmesh = \"tri\"\nmatrix = [\n[1, 0, 0, 0],\n  [0, 1, 0, 0],\n\
+         [0, 0, 1, 0], [0, 0, 0, 1]]\n[[light]]\nposition = [0, 5, 5]\nintensity = [1, 1, 1]\n\
+         [[instance]]\nmesh = \"tri\"\nscale = [1, 2, 1]\nmaterial = \"m\"\n"
+    );
+    let path = Path::new("s.toml");
+    let file = SceneFile::parse(&text, path).unwrap();
+    let whole: SceneFile = toml::from_str(&text).unwrap();
+    assert_eq!(file.instances.len(), 3);
+    assert_eq!(file.instances, whole.instances);
+    assert_eq!(file.render, whole.render);
+    assert_eq!(file.lights, whole.lights);
+    assert_eq!(file.meshes, whole.meshes);
+    let line = |key: &str| {
+        let at = text.find(key).unwrap();
+        text[..at].matches('\n').count() + 1
+    };
+    assert_eq!(
+        file.lines.line("instance[0].translate"),
+        Some(line("translate"))
+    );
+    assert_eq!(file.lines.line("instance[1].matrix"), Some(line("matrix")));
+    assert_eq!(
+        file.lines.line("instance[2].scale"),
+        Some(line("scale = [1, 2"))
+    );
+    assert_eq!(file.lines.line("render.depth"), Some(line("depth = 2")));
+    assert_eq!(file.lines.line("light[0].position"), Some(line("position")));
+    // an error in a table names its line and column
+    let bad = text.replace("scale = [1, 2, 1]", "scale = [1, 2, 1]\nshear = 3");
+    let e = SceneFile::parse(&bad, path).unwrap_err().to_string();
+    let want = format!(
+        "s.toml:{}: column 1: unknown field `shear`",
+        line("scale = [1, 2") + 1
+    );
+    assert!(e.starts_with(&want), "{e}");
+    // an array and tables of instances together are refused, as the parser refuses them
+    let both = format!("instance = [{{ mesh = \"tri\" }}]\n{text}");
+    let e = SceneFile::parse(&both, path).unwrap_err().to_string();
+    assert!(
+        e.contains("both as an array and as [[instance]] tables"),
+        "{e}"
+    );
+}

@@ -1,7 +1,7 @@
 //! Reading a scene file's text: TOML parsing with the line and column of each error, the
 //! refusal of files that are not scenes, and the line of the key a validation error is about.
 
-use super::schema::{Coef, KeyLines, SceneFile, check_size};
+use super::schema::{Coef, SceneFile, check_size};
 use crate::error::{Error, Result};
 use std::path::Path;
 
@@ -9,16 +9,34 @@ impl SceneFile {
     /// Parse TOML text; errors carry the line and column of the offending key.
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let mut file: SceneFile = toml::from_str(text).map_err(|e| {
+        // `[[instance]]` tables are read one at a time (a field of 10^6 is 97 MB of text)
+        let cut = super::instance_text::cut(text);
+        let whole = cut.as_ref().map_or(text, |c| c.rest.as_str());
+        let mut file: SceneFile = toml::from_str(whole).map_err(|e| {
             let (line, col) = e
                 .span()
-                .map(|s| line_col(text.as_bytes(), s.start))
+                .map(|s| line_col(whole.as_bytes(), s.start))
                 .unwrap_or((0, 0));
             // toml's messages span several lines (a source excerpt); keep the first line.
             let msg = e.message().lines().next().unwrap_or("invalid TOML").trim();
             Error::parse(path, line, format!("column {col}: {msg}"))
         })?;
-        file.lines = KeyLines::of(text);
+        file.lines = KeyLines::of(whole);
+        if let Some(cut) = cut {
+            if let (false, Some(&(_, line))) = (file.instances.is_empty(), cut.tables.first()) {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    "column 1: instance is given both as an array and as [[instance]] tables",
+                ));
+            }
+            file.instances.reserve_exact(cut.tables.len());
+            for (i, &(body, line)) in cut.tables.iter().enumerate() {
+                let d = super::instance_text::instance(i, body, line, &mut file.lines)
+                    .map_err(|(l, c, m)| Error::parse(path, l, format!("column {c}: {m}")))?;
+                file.instances.push(d);
+            }
+        }
         // `kr` omitted = `ks`, but a material that gives neither gets the default material's
         // no reflection (a material with only a colour renders like a mesh's default).
         for (i, m) in file.materials.iter_mut().enumerate() {
@@ -140,7 +158,7 @@ fn not_a_scene(path: &Path) -> Result<()> {
 }
 
 /// 1-based (line, column in characters) of byte offset `at`, clamped to the text.
-fn line_col(text: &[u8], at: usize) -> (usize, usize) {
+pub(super) fn line_col(text: &[u8], at: usize) -> (usize, usize) {
     let before = &text[..at.min(text.len())];
     let line_start = before
         .iter()
@@ -154,4 +172,72 @@ fn line_col(text: &[u8], at: usize) -> (usize, usize) {
         .count()
         + 1;
     (line, col)
+}
+
+/// The 1-based line of each key of a scene file's text, by its path (`background.cubemap`,
+/// `mesh[1].file`), so that errors about the files a key names can point at the key. Source
+/// positions are not part of a scene's value: any two `KeyLines` compare equal.
+#[derive(Clone, Debug, Default)]
+pub struct KeyLines(pub(super) Vec<(String, usize)>);
+
+impl PartialEq for KeyLines {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl KeyLines {
+    /// Read the key positions of TOML text (empty when it does not parse).
+    pub fn of(text: &str) -> KeyLines {
+        use toml::de::{DeTable, DeValue};
+        let mut out = Vec::new();
+        let Ok(doc) = DeTable::parse(text) else {
+            return KeyLines(out);
+        };
+        // Newline offsets, found once: a line is a binary search (a scene of thousands of
+        // entries would otherwise rescan its text per key).
+        let newlines: Vec<usize> = text
+            .bytes()
+            .enumerate()
+            .filter_map(|(i, b)| (b == b'\n').then_some(i))
+            .collect();
+        let line = |at: usize| newlines.partition_point(|&n| n < at) + 1;
+        let table = |prefix: String, t: &DeTable, out: &mut Vec<(String, usize)>| {
+            for (k, _) in t.iter() {
+                out.push((format!("{prefix}.{}", k.get_ref()), line(k.span().start)));
+            }
+        };
+        for (k, v) in doc.get_ref().iter() {
+            let name = k.get_ref().to_string();
+            match v.get_ref() {
+                DeValue::Table(t) => table(name, t, &mut out),
+                DeValue::Array(items) => {
+                    for (i, item) in items.into_iter().enumerate() {
+                        if let DeValue::Table(t) = item.get_ref() {
+                            table(format!("{name}[{i}]"), t, &mut out);
+                        }
+                    }
+                }
+                _ => out.push((name, line(k.span().start))),
+            }
+        }
+        KeyLines(out)
+    }
+
+    /// Add the top-level keys of the TOML table body `text` as `prefix.key`, each on its line
+    /// in `text` plus `offset` (an `[[instance]]` table read alone).
+    pub(super) fn extend_table(&mut self, prefix: &str, text: &str, offset: usize) {
+        let Ok(doc) = toml::de::DeTable::parse(text) else {
+            return;
+        };
+        for (k, _) in doc.get_ref().iter() {
+            let line = offset + 1 + text[..k.span().start].matches('\n').count();
+            self.0.push((format!("{prefix}.{}", k.get_ref()), line));
+        }
+    }
+
+    /// The line of `key` (as `mesh[1].file`), if the text had it.
+    pub fn line(&self, key: &str) -> Option<usize> {
+        self.0.iter().find(|(k, _)| k == key).map(|&(_, l)| l)
+    }
 }
