@@ -161,6 +161,23 @@ pub const TILE: u32 = 16;
 /// at 3840x2160 on two, whole-process CPU time 0.95x and wall time 0.98x.
 pub const BATCH_BYTES: usize = 4 << 20;
 
+/// Bands in the next batch, `left` of the part's `total` bands still to render: a full
+/// batch (`full` bands), but where the part spans several batches, the last ones taper,
+/// each about half of what is left and no fewer than `least` bands (four tiles per thread).
+/// The sink's work on a batch (EXR compression) runs while the next batch renders, so what
+/// is left of it when the last tile is done is serial time; batches that shrink toward the
+/// end leave little. 4K `phong` on two threads, default output (2026-12-07, AMD EPYC Zen
+/// 3, 2 vCPUs): the wall time after the last band went from 45-48 ms to 9-30 ms, the whole
+/// process's wall time 0.98x, and two threads against one 1.85x (1.81x before); one
+/// thread's CPU time is level.
+fn batch_bands(left: u32, total: u32, full: u32, least: u32) -> u32 {
+    if total <= full {
+        return left;
+    }
+    let most = full.min(left);
+    left.div_ceil(2).clamp(least.min(most), most)
+}
+
 /// Render `world` over tiles in parallel with the engine of `settings`: the wavefront
 /// renderer on packets, or the scalar reference (`recursive::trace1` per sample).
 /// `progress(pixels)` is called as tiles finish.
@@ -229,9 +246,13 @@ pub fn render_rows(
     let (ty0, ty1) = (part.y0 / TILE, part.y1.div_ceil(TILE));
     let band_bytes = TILE as usize * pw.max(1) * std::mem::size_of::<Vec3>();
     let bands_per_batch = (BATCH_BYTES / band_bytes).max(1) as u32;
+    let tiles_per_band = (tx1 - tx0).max(1);
+    let least = (4 * rayon::current_num_threads() as u32).div_ceil(tiles_per_band);
     let mut rows = Vec::new();
-    for batch_ty in (ty0..ty1).step_by(bands_per_batch as usize) {
-        let batch_ty1 = (batch_ty + bands_per_batch).min(ty1);
+    let mut batch_ty1 = ty0;
+    while batch_ty1 < ty1 {
+        let batch_ty = batch_ty1;
+        batch_ty1 += batch_bands(ty1 - batch_ty, ty1 - ty0, bands_per_batch, least);
         let tiles: Vec<(u32, u32)> = (batch_ty..batch_ty1)
             .flat_map(|ty| (tx0..tx1).map(move |tx| (tx * TILE, ty * TILE)))
             .collect();
@@ -307,4 +328,42 @@ pub fn render_rows(
         time: start.elapsed(),
         ..stats
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::batch_bands;
+
+    /// The batches of `total` bands, in order.
+    fn batches(total: u32, full: u32, least: u32) -> Vec<u32> {
+        let (mut left, mut out) = (total, Vec::new());
+        while left > 0 {
+            let b = batch_bands(left, total, full, least);
+            assert!(b >= 1 && b <= left, "{b} of {left}");
+            out.push(b);
+            left -= b;
+        }
+        out
+    }
+
+    #[test]
+    fn batches_cover_the_part_and_taper_at_its_end() {
+        // a part within one batch: one batch
+        assert_eq!(batches(32, 42, 1), vec![32]);
+        // 4K: 135 bands, 22 a batch
+        assert_eq!(
+            batches(135, 22, 1),
+            vec![22, 22, 22, 22, 22, 13, 6, 3, 2, 1]
+        );
+        // never under `least` bands (but the last), never over a full batch
+        assert_eq!(batches(100, 30, 4), vec![30, 30, 20, 10, 5, 4, 1]);
+        // `least` above a full batch: full batches
+        assert_eq!(batches(10, 3, 8), vec![3, 3, 3, 1]);
+        for (total, full, least) in [(1, 1, 1), (7, 2, 1), (1000, 7, 3), (64, 8, 100)] {
+            let b = batches(total, full, least);
+            assert_eq!(b.iter().sum::<u32>(), total);
+            assert!(b.windows(2).all(|w| w[1] <= w[0]), "{b:?}");
+            assert!(b.iter().all(|&n| n <= full), "{b:?}");
+        }
+    }
 }
