@@ -67,7 +67,13 @@ fn write_glb(path: &Path) {
         "samplers": [{"wrapS": 33648, "wrapT": 33071}],
         "images": [{"bufferView": 3, "mimeType": "image/png"}],
     });
-    let mut text = serde_json::to_vec(&doc).unwrap();
+    std::fs::write(path, glb_bytes(&doc, &bin)).unwrap();
+}
+
+/// A GLB file's bytes: the JSON chunk (`doc`, padded with spaces) and the binary chunk `bin`
+/// (a multiple of 4 bytes long).
+fn glb_bytes(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = serde_json::to_vec(doc).unwrap();
     while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
@@ -81,7 +87,7 @@ fn write_glb(path: &Path) {
     out.extend((bin.len() as u32).to_le_bytes());
     out.extend(b"BIN\0");
     out.extend(bin);
-    std::fs::write(path, out).unwrap();
+    out
 }
 
 #[test]
@@ -258,21 +264,7 @@ fn only_emitters_in_use_replace_the_canonical_lights() {
         .unwrap()
         .push(json!({"name": "lamp", "emissiveFactor": [1, 1, 1]}));
     let write = |doc: &serde_json::Value, path: &Path| {
-        let mut text = serde_json::to_vec(doc).unwrap();
-        while !text.len().is_multiple_of(4) {
-            text.push(b' ');
-        }
-        let total = 12 + 8 + text.len() + 8 + bin.len();
-        let mut out = b"glTF".to_vec();
-        for word in [2, total, text.len()] {
-            out.extend((word as u32).to_le_bytes());
-        }
-        out.extend(b"JSON");
-        out.extend(text);
-        out.extend((bin.len() as u32).to_le_bytes());
-        out.extend(b"BIN\0");
-        out.extend(bin);
-        std::fs::write(path, out).unwrap();
+        std::fs::write(path, glb_bytes(doc, bin)).unwrap();
     };
     write(&doc, &glb);
     let (file, _) = whitted::io::mesh_scene::scene_for_mesh(&glb, 64, 48).unwrap();
