@@ -16,10 +16,12 @@
 //! Where two engines are candidates, which is faster depends on the mesh as well (how soon
 //! a packet's lanes part), so a batch of at least [`PILOT_MIN`] rays settles it by a pilot
 //! ([`pilot`]): runs of 384 rays covering one ray in 512 (at least 8 runs), spread over the
-//! batch, each traced by both, the first 64 rays of a run untimed; the batch is then traced
-//! by the one with the smaller total (the pilot's rays again: 0.4% of a large batch's rays
-//! are traced twice more, 3.0% at the bench's 201,702 rays, 4.7% at [`PILOT_MIN`]). Smaller
-//! batches (and the renderer's tile-sized queues) take the first candidate.
+//! batch, each traced by both into the batch's output, the first 64 rays of a run untimed;
+//! the rest of the batch is then traced by the one with the smaller total ([`left_over`]: the
+//! pilot's results stand, as every engine's are `intersect1`'s; the pilot's cost is the
+//! second trace of its rays, 0.4% of a large batch, 1.5% of the bench's 201,702-ray sets,
+//! 2.3% at [`PILOT_MIN`]). Smaller batches (and the renderer's tile-sized queues) take the
+//! first candidate.
 
 use crate::accel::Accel;
 use crate::ray::Ray;
@@ -359,3 +361,26 @@ pub fn pilot_by(
 
 /// A pilot run's time counts at most this many times the other candidate's on it.
 pub const PILOT_CLAMP: f64 = 3.0;
+
+/// The parts of `range` outside the sorted, disjoint ranges `done`, in order: what is left
+/// of a batch's rays once its pilot ([`pilot`]) has traced its runs. Both candidates trace
+/// every run into the batch's output, and every engine's hits are `intersect1`'s bit for
+/// bit, so the chosen engine need not trace those rays again (`range` may be one chunk of a
+/// parallel pass; runs outside it are skipped).
+pub fn left_over(
+    range: std::ops::Range<usize>,
+    done: &[std::ops::Range<usize>],
+) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    let end = range.end;
+    let mut at = range.start;
+    done.iter()
+        .filter(move |d| d.end > range.start && d.start < range.end)
+        .map(Some)
+        .chain([None])
+        .filter_map(move |d| {
+            let stop = d.map_or(end, |d| d.start.max(at));
+            let piece = at..stop;
+            at = d.map_or(end, |d| d.end.min(end));
+            (!piece.is_empty()).then_some(piece)
+        })
+}

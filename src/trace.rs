@@ -36,14 +36,19 @@ pub fn trace_rays_with(
     let mut out = output(rays.len(), None);
     // (the pilot on a thread of the pool that traces the batch, as the bench's: a calling
     // thread outside it shares the cores with the pool's threads)
-    let engine = rayon::scope(|_| {
+    let (engine, done) = rayon::scope(|_| {
         resolve(engine, accel, rays, |e, r| {
             intersect_into(accel, &rays[r.clone()], e, cull, &mut out[r])
         })
     });
     out.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
-        .for_each(|(o, r)| intersect_into(accel, r, engine, cull, o));
+        .enumerate()
+        .for_each(|(k, (o, r))| {
+            for p in left_over_in_chunk(k, r.len(), &done) {
+                intersect_into(accel, &r[p.clone()], engine, cull, &mut o[p]);
+            }
+        });
     (out, engine)
 }
 
@@ -62,15 +67,31 @@ pub fn occluded_rays_with(
 ) -> (Vec<bool>, Engine) {
     crate::cpu::warn_if_slow_build();
     let mut out = output(rays.len(), false);
-    let engine = rayon::scope(|_| {
+    let (engine, done) = rayon::scope(|_| {
         resolve(engine, accel, rays, |e, r| {
             occluded_into(accel, &rays[r.clone()], e, cull, &mut out[r])
         })
     });
     out.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
-        .for_each(|(o, r)| occluded_into(accel, r, engine, cull, o));
+        .enumerate()
+        .for_each(|(k, (o, r))| {
+            for p in left_over_in_chunk(k, r.len(), &done) {
+                occluded_into(accel, &r[p.clone()], engine, cull, &mut o[p]);
+            }
+        });
     (out, engine)
+}
+
+/// The rays of chunk `k` (of `len` rays) still to trace after the pilot traced `done`
+/// ([`crate::engine::left_over`]), as ranges within the chunk.
+fn left_over_in_chunk(
+    k: usize,
+    len: usize,
+    done: &[std::ops::Range<usize>],
+) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    let base = k * CHUNK;
+    crate::engine::left_over(base..base + len, done).map(move |p| p.start - base..p.end - base)
 }
 
 /// An output array of `n` entries, on huge pages where the kernel has them: a batch's
@@ -84,20 +105,25 @@ fn output<T: Clone>(n: usize, fill: T) -> Vec<T> {
 }
 
 /// `engine`, or for `auto` the engine for `rays`: the rule's one candidate, or of two the
-/// faster on a pilot (`run(engine, range)` traces `rays[range]`; see
-/// [`crate::engine::pilot`]), on the calling thread.
+/// faster on a pilot (`run(engine, range)` traces `rays[range]` into the batch's output;
+/// see [`crate::engine::pilot`]), on the calling thread; beside it the ranges of rays the
+/// pilot traced (sorted, disjoint; empty without a pilot), which need no second trace
+/// ([`crate::engine::left_over`]).
 pub fn resolve(
     engine: Engine,
     accel: &Accel,
     rays: &[Ray],
     run: impl FnMut(Engine, std::ops::Range<usize>),
-) -> Engine {
+) -> (Engine, Vec<std::ops::Range<usize>>) {
     if engine != Engine::Auto {
-        return engine;
+        return (engine, vec![]);
     }
     match crate::engine::choices(accel, rays) {
-        Choice::One(e) => e,
-        Choice::Try(two) => crate::engine::pilot(two, rays.len(), run),
+        Choice::One(e) => (e, vec![]),
+        Choice::Try(two) => (
+            crate::engine::pilot(two, rays.len(), run),
+            crate::engine::pilot_blocks(rays.len()),
+        ),
     }
 }
 

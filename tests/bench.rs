@@ -699,3 +699,42 @@ fn build_timing_reports_the_fastest_collapse() {
         t.wall_best
     );
 }
+
+/// The bench's `auto` row with a pilot (a set of at least `PILOT_MIN` rays with two
+/// candidates), on the calling thread and on a pool of two, from fresh buffers: the pilot's
+/// runs, which the chosen engine does not trace again, hold the reference's results like
+/// the rest.
+#[test]
+fn auto_pass_with_a_pilot_is_exact() {
+    use whitted::engine::{self, Choice, Engine};
+    let (mesh, _) =
+        whitted::io::load_mesh(&common::assets().join("meshes/kitten.m")).expect("the kitten");
+    let accel = build(&mesh);
+    let work = Workloads::generate_with(&mesh, &accel, 640, 360, 4096);
+    for (any_hit, set) in [
+        (false, &work.secondary.incoherent),
+        (true, &work.secondary.shadow),
+    ] {
+        let mut rays = set.clone();
+        while rays.len() < engine::PILOT_MIN {
+            rays.extend_from_within(..rays.len().min(engine::PILOT_MIN - rays.len()));
+        }
+        assert!(matches!(engine::choices(&accel, &rays), Choice::Try(_)));
+        let packets = bench::Packets::new(&rays);
+        let want = {
+            let mut out = bench::Out::new(&accel, Engine::Scalar, any_hit, &rays);
+            bench::pass(&accel, &rays, &packets, &mut out, None);
+            out.results(rays.len())
+        };
+        assert!(want.count() > 0 && want.count() < rays.len());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("a pool");
+        for pool in [None, Some(&pool)] {
+            let mut out = bench::Out::new(&accel, Engine::Auto, any_hit, &rays);
+            bench::pass(&accel, &rays, &packets, &mut out, pool);
+            assert!(out.results(rays.len()) == want, "any hit {any_hit}");
+        }
+    }
+}

@@ -438,6 +438,43 @@ fn pilot_runs_spread_over_the_batch() {
     }
 }
 
+/// What is left of a batch (or of one chunk of it) once the pilot traced its runs: every ray
+/// outside the runs exactly once, in order, nothing inside them.
+#[test]
+fn left_over_skips_the_pilot_runs() {
+    let ranges = |r: std::ops::Range<usize>, done: &[std::ops::Range<usize>]| {
+        engine::left_over(r, done).collect::<Vec<_>>()
+    };
+    assert_eq!(ranges(0..100, &[]), vec![0..100]);
+    assert_eq!(ranges(0..100, std::slice::from_ref(&(0..100))), vec![]);
+    assert_eq!(
+        ranges(0..100, &[0..10, 20..30, 90..100]),
+        vec![10..20, 30..90]
+    );
+    // chunks that cut runs, and runs outside the chunk
+    assert_eq!(
+        ranges(50..150, &[0..60, 100..110, 140..200]),
+        vec![60..100, 110..140]
+    );
+    assert_eq!(ranges(50..150, &[0..10, 200..300]), vec![50..150]);
+    assert_eq!(ranges(50..50, std::slice::from_ref(&(0..10))), vec![]);
+    for n in [engine::PILOT_MIN, 201702, 2073600] {
+        let runs = engine::pilot_blocks(n);
+        for chunk in [4096, 100_000, n] {
+            let mut covered = vec![0u8; n];
+            for start in (0..n).step_by(chunk) {
+                for p in engine::left_over(start..(start + chunk).min(n), &runs) {
+                    covered[p].iter_mut().for_each(|c| *c += 1);
+                }
+            }
+            for r in &runs {
+                covered[r.clone()].iter_mut().for_each(|c| *c += 1);
+            }
+            assert!(covered.iter().all(|&c| c == 1), "{n} {chunk}");
+        }
+    }
+}
+
 /// The pilot's decision (given times, no clock): the faster candidate wins; one run slowed
 /// far beyond the other engine's does not move it; the runs alternate which engine goes
 /// first; small batches take the first without a pilot. And the timed pilot warms each

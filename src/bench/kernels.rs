@@ -192,56 +192,116 @@ pub fn pass(
     out: &mut Out,
     pool: Option<&rayon::ThreadPool>,
 ) {
-    let (pr, pa) = (&packets.rays[..], &packets.active[..]);
     if let Out::Auto(outs, chosen) = out {
         fn of(outs: &mut [(Engine, Out)], e: Engine) -> &mut Out {
             &mut outs.iter_mut().find(|o| o.0 == e).expect("a candidate").1
         }
         let mut choose = || match crate::engine::choices(accel, rays) {
-            Choice::One(e) => e,
-            Choice::Try(two) => crate::engine::pilot(two, rays.len(), |e, r| {
-                pass_range(accel, rays, packets, of(outs, e), r)
-            }),
+            Choice::One(e) => (e, vec![]),
+            Choice::Try(two) => (
+                crate::engine::pilot(two, rays.len(), |e, r| {
+                    pass_range(accel, rays, packets, of(outs, e), r)
+                }),
+                crate::engine::pilot_blocks(rays.len()),
+            ),
         };
         // (with a pool, on one of its threads, as the passes run: the calling thread would
         // share the cores with the pool's threads still spinning after the last pass)
-        *chosen = match pool {
+        let done;
+        (*chosen, done) = match pool {
             Some(pool) => pool.install(choose),
             None => choose(),
         };
-        return pass(accel, rays, packets, of(outs, *chosen), pool);
+        // (the pilot's runs are in the chosen engine's buffers already)
+        return pass_except(accel, rays, packets, of(outs, *chosen), pool, &done);
     }
+    pass_except(accel, rays, packets, out, pool, &[]);
+}
+
+/// [`pass`] of a concrete engine over the rays outside `done` (sorted, disjoint ranges that
+/// start and end at multiples of 16, or at the set's end: `auto`'s pilot runs).
+fn pass_except(
+    accel: &Accel,
+    rays: &[Ray],
+    packets: &Packets,
+    out: &mut Out,
+    pool: Option<&rayon::ThreadPool>,
+    done: &[std::ops::Range<usize>],
+) {
+    let (pr, pa) = (&packets.rays[..], &packets.active[..]);
     let Some(pool) = pool else {
-        pass_range(accel, rays, packets, out, 0..rays.len());
+        for r in crate::engine::left_over(0..rays.len(), done) {
+            pass_range(accel, rays, packets, out, r);
+        }
         return;
     };
     const P: usize = CHUNK / 8;
+    // the rays of work item `k` (of `len` rays) to trace, as ranges within it
+    let todo = |k: usize, len: usize| {
+        let base = k * CHUNK;
+        crate::engine::left_over(base..base + len, done).map(move |p| p.start - base..p.end - base)
+    };
+    // the same in packets of 8 (`len` packets)
+    let todo8 = |k: usize, len: usize| {
+        todo(k, rays.len().saturating_sub(k * CHUNK).min(len * 8))
+            .map(|p| p.start / 8..p.end.div_ceil(8))
+    };
     pool.install(|| match out {
         Out::Hits(o, f) => o
             .par_chunks_mut(CHUNK)
             .zip(rays.par_chunks(CHUNK))
-            .for_each(|(o, r)| f(accel, r, false, o)),
+            .enumerate()
+            .for_each(|(k, (o, r))| {
+                for p in todo(k, r.len()) {
+                    f(accel, &r[p.clone()], false, &mut o[p]);
+                }
+            }),
         Out::Occ(o, f) => o
             .par_chunks_mut(CHUNK)
             .zip(rays.par_chunks(CHUNK))
-            .for_each(|(o, r)| f(accel, r, false, o)),
+            .enumerate()
+            .for_each(|(k, (o, r))| {
+                for p in todo(k, r.len()) {
+                    f(accel, &r[p.clone()], false, &mut o[p]);
+                }
+            }),
         Out::Hits8(o, f) => o
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
-            .for_each(|(o, (r, a))| hits8(accel, *f, r, a, o)),
+            .enumerate()
+            .for_each(|(k, (o, (r, a)))| {
+                for p in todo8(k, r.len()) {
+                    hits8(accel, *f, &r[p.clone()], &a[p.clone()], &mut o[p]);
+                }
+            }),
         Out::Occ8(o, f) => o
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
-            .for_each(|(o, (r, a))| occ8(accel, *f, r, a, o)),
-        // (P is even: pairs never straddle two work items)
+            .enumerate()
+            .for_each(|(k, (o, (r, a)))| {
+                for p in todo8(k, r.len()) {
+                    occ8(accel, *f, &r[p.clone()], &a[p.clone()], &mut o[p]);
+                }
+            }),
+        // (P is even, and so is every range's start: pairs never straddle two pieces)
         Out::Hits16(o, f) => o
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
-            .for_each(|(o, (r, a))| hits16(accel, *f, r, a, o)),
+            .enumerate()
+            .for_each(|(k, (o, (r, a)))| {
+                for p in todo8(k, r.len()) {
+                    hits16(accel, *f, &r[p.clone()], &a[p.clone()], &mut o[p]);
+                }
+            }),
         Out::Occ16(o, f) => o
             .par_chunks_mut(P)
             .zip(pr.par_chunks(P).zip(pa.par_chunks(P)))
-            .for_each(|(o, (r, a))| occ16(accel, *f, r, a, o)),
+            .enumerate()
+            .for_each(|(k, (o, (r, a)))| {
+                for p in todo8(k, r.len()) {
+                    occ16(accel, *f, &r[p.clone()], &a[p.clone()], &mut o[p]);
+                }
+            }),
         Out::Auto(..) => unreachable!("auto passes on to its engine above"),
     })
 }
