@@ -72,8 +72,8 @@ struct MergeArgs {
     /// EXR output in 16-bit floats (implied when every part is 16-bit).
     #[arg(long)]
     half: bool,
-    /// EXR compression: zip (default), zips, piz, rle or none (all lossless).
-    #[arg(long, default_value = "zip")]
+    /// EXR compression: piz (default), zip, zips, rle or none (all lossless).
+    #[arg(long, default_value = "piz")]
     exr_compression: String,
     /// No summary line.
     #[arg(long, short = 'q')]
@@ -206,8 +206,8 @@ struct RenderArgs {
     /// EXR output in 16-bit floats instead of 32-bit.
     #[arg(long)]
     half: bool,
-    /// EXR compression: zip (default), zips, piz, rle or none (all lossless).
-    #[arg(long, default_value = "zip")]
+    /// EXR compression: piz (default), zip, zips, rle or none (all lossless).
+    #[arg(long, default_value = "piz")]
     exr_compression: String,
 }
 

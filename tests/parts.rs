@@ -196,7 +196,7 @@ fn four_tiles_of_phong_merge_to_the_full_render_and_three_name_the_gap() {
         v["data_window"],
         serde_json::json!({"x": [0, 1024], "y": [384, 576]})
     );
-    assert_eq!(v["compression"], "zip16");
+    assert_eq!(v["compression"], "piz");
 }
 
 /// Any part, cut anywhere (across tiles, one pixel wide, at the image's ragged edge), renders

@@ -17,6 +17,8 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
+mod piz;
+
 /// How EXR pixels are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ExrOptions {
@@ -29,14 +31,14 @@ pub struct ExrOptions {
 impl Default for ExrOptions {
     fn default() -> Self {
         ExrOptions {
-            compression: ExrCompression::Zip,
+            compression: ExrCompression::Piz,
             half: false,
         }
     }
 }
 
-/// The EXR compressions whitted writes (all lossless). ZIP is the default: through libdeflate
-/// it costs less CPU time than PIZ for files at most 15% larger (docs/output.md).
+/// The EXR compressions whitted writes (all lossless). PIZ is the default: whitted's encoder
+/// makes the smallest files and costs less CPU time than ZIP (docs/output.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExrCompression {
     /// Raw samples.
@@ -47,7 +49,7 @@ pub enum ExrCompression {
     Zips,
     /// zlib over blocks of 16 scan lines (OpenEXR's ZIP), through libdeflate.
     Zip,
-    /// wavelet + Huffman over blocks of 32 scan lines (the `exr` crate's encoder).
+    /// wavelet + Huffman over blocks of 32 scan lines (OpenEXR's PIZ), whitted's encoder.
     Piz,
 }
 
@@ -57,7 +59,7 @@ pub const ZIP_LEVEL: i32 = 4;
 
 impl ExrCompression {
     /// The names `--exr-compression` takes, the default first.
-    pub const NAMES: [&'static str; 5] = ["zip", "zips", "piz", "rle", "none"];
+    pub const NAMES: [&'static str; 5] = ["piz", "zip", "zips", "rle", "none"];
 
     /// The compression of a name in [`Self::NAMES`].
     pub fn from_name(name: &str) -> Option<Self> {
@@ -82,9 +84,12 @@ impl ExrCompression {
         }
     }
 
-    /// Compressed by whitted's own ZIP encoder rather than the `exr` crate's.
-    fn is_zip(self) -> bool {
-        matches!(self, ExrCompression::Zip | ExrCompression::Zips)
+    /// Compressed by whitted's own encoders rather than the `exr` crate's.
+    fn is_whitteds(self) -> bool {
+        matches!(
+            self,
+            ExrCompression::Zip | ExrCompression::Zips | ExrCompression::Piz
+        )
     }
 }
 
@@ -430,6 +435,17 @@ fn write_exr<W: Write + Seek + Send>(
         .collect();
     let (pw, ph) = (part.width() as usize, part.height() as usize);
     let compression = opts.compression;
+    // 16-bit words per sample of each channel, in the file's order (PIZ's blocks)
+    let words: Vec<usize> = layout
+        .iter()
+        .map(|(_, s)| {
+            if opts.half && !matches!(s, Source::Id) {
+                1
+            } else {
+                2
+            }
+        })
+        .collect();
     let mut header = Header::new("rgb".into(), (pw, ph), channels)
         .with_encoding(
             compression.to_exr(),
@@ -464,12 +480,17 @@ fn write_exr<W: Write + Seek + Send>(
             let compress_and_write = |k: usize, rows: usize, data: Vec<u8>| {
                 let t = Instant::now();
                 let y = part.y0 as i32 + (k * lines) as i32;
-                let chunk = if compression.is_zip() {
+                let chunk = if compression.is_whitteds() {
+                    let compressed_pixels_le = if compression == ExrCompression::Piz {
+                        piz::piz_block(&data, pw, rows, &words)
+                    } else {
+                        zip_block(&data)
+                    };
                     Ok(Chunk {
                         layer_index: 0,
                         compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {
                             y_coordinate: y,
-                            compressed_pixels_le: zip_block(&data),
+                            compressed_pixels_le,
                         }),
                     })
                 } else {

@@ -1,0 +1,624 @@
+//! OpenEXR's PIZ compression of one block of scan lines, written for speed.
+//!
+//! The format (OpenEXR's `ImfPizCompressor`, which every reader decodes): the block's 16-bit
+//! words gathered channel by channel; a bitmap of the values that occur, and each word
+//! replaced by its rank among them (so the values span `0..=max`); per channel and per word
+//! of a sample, a 2D Haar wavelet over the block (14-bit lifting when `max < 2^14`, else
+//! modular 16-bit); then one Huffman code over all the words, with a run-length symbol. What
+//! the format leaves to the encoder is the Huffman code itself: any prefix code of at most 58
+//! bits per symbol decodes, and this one builds an optimal code in place over the symbols
+//! sorted by frequency (Moffat and Katajainen's algorithm, after a counting sort), where the
+//! exr crate's encoder pushes every symbol through a binary heap. The bytes need not equal
+//! another encoder's; what a reader gets back must equal the block, bit for bit (tested
+//! against the exr crate's decoder here and OpenEXR's own in `tests/openexr.rs`).
+
+/// Bytes of the bitmap of 16-bit values.
+const BITMAP_BYTES: usize = 65536 / 8;
+/// Symbols of the Huffman code: the 65536 values and the run-length symbol after the
+/// largest value used.
+const SYMBOLS: usize = 65537;
+/// Code-length table: lengths 1 to 58, a run of 2 to 5 zero lengths as `59 + run - 2`, a
+/// longer run (6 to 261) as 63 and `run - 6` in 8 bits.
+const SHORT_ZERO_RUN: u64 = 59;
+const LONG_ZERO_RUN: u64 = 63;
+const SHORTEST_LONG_RUN: usize = 6;
+const LONGEST_LONG_RUN: usize = 255 + SHORTEST_LONG_RUN;
+/// The longest code OpenEXR's decoder takes.
+const MAX_CODE_BITS: u32 = 58;
+
+/// Buffers one thread's blocks reuse (a 4K block would otherwise allocate and clear about
+/// 2 MB of tables).
+struct Scratch {
+    data: Vec<u16>,
+    lut: Vec<u16>,
+    freq: Vec<u32>,
+    odd: Vec<u32>,
+    lengths: Vec<u32>,
+    codes: Vec<u64>,
+    shorts: Vec<u32>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch {
+        data: Vec::new(),
+        lut: vec![0; 65536],
+        freq: vec![0; SYMBOLS],
+        odd: vec![0; SYMBOLS],
+        lengths: vec![0; SYMBOLS],
+        codes: vec![0; SYMBOLS],
+        shorts: vec![0; SYMBOLS],
+    });
+}
+
+/// A PIZ block of `lines` scan lines of `width` pixels: `raw` holds, line by line, each
+/// channel's samples (little-endian), and `words[c]` is channel `c`'s 16-bit words per
+/// sample (1 for half, 2 for f32 and u32). A block that would not shrink is stored raw, as
+/// OpenEXR does.
+///
+/// # Panics
+/// If `raw` is not `lines * width * 2 * sum(words)` bytes, or a channel has other than 1 or
+/// 2 words per sample.
+pub fn piz_block(raw: &[u8], width: usize, lines: usize, words: &[usize]) -> Vec<u8> {
+    let per_line: usize = words.iter().sum::<usize>() * width;
+    assert_eq!(raw.len(), 2 * per_line * lines, "a whole block of samples");
+    assert!(
+        words.iter().all(|&w| w == 1 || w == 2),
+        "1 or 2 words per sample"
+    );
+    if raw.is_empty() {
+        return Vec::new();
+    }
+    SCRATCH.with_borrow_mut(|s| encode(raw, width, lines, words, s))
+}
+
+fn encode(raw: &[u8], width: usize, lines: usize, words: &[usize], s: &mut Scratch) -> Vec<u8> {
+    // the words, channel by channel (each channel's lines one after another), and the
+    // bitmap of the values that occur
+    let data = &mut s.data;
+    data.clear();
+    data.resize(raw.len() / 2, 0);
+    let mut bitmap = [0u8; BITMAP_BYTES];
+    let starts: Vec<usize> = words
+        .iter()
+        .scan(0, |at, &w| {
+            let s = *at;
+            *at += w * width * lines;
+            Some(s)
+        })
+        .collect();
+    let mut line_at = 0;
+    for y in 0..lines {
+        for (&w, &start) in words.iter().zip(&starts) {
+            let n = w * width;
+            let dst = &mut data[start + y * n..start + (y + 1) * n];
+            let src = &raw[2 * line_at..2 * (line_at + n)];
+            for (d, b) in dst.iter_mut().zip(src.chunks_exact(2)) {
+                let v = u16::from_le_bytes([b[0], b[1]]);
+                bitmap[(v >> 3) as usize] |= 1 << (v & 7);
+                *d = v;
+            }
+            line_at += n;
+        }
+    }
+    // zero is always taken to occur, and not stored
+    bitmap[0] &= !1;
+    let used = bitmap.iter().position(|&b| b != 0);
+    let (min_nz, max_nz) = match used {
+        Some(lo) => (lo, bitmap.iter().rposition(|&b| b != 0).unwrap_or(lo)),
+        None => (BITMAP_BYTES - 1, 0),
+    };
+    // each value's rank among those that occur (zero's is 0; the entries of values that do
+    // not occur are stale and never read)
+    let lut = &mut s.lut;
+    lut[0] = 0;
+    let mut rank = 1u32;
+    for (byte, &bits) in bitmap.iter().enumerate().skip(min_nz) {
+        let mut bits = bits;
+        while bits != 0 {
+            let i = byte * 8 + bits.trailing_zeros() as usize;
+            lut[i] = rank as u16;
+            rank += 1;
+            bits &= bits - 1;
+        }
+    }
+    let max_value = rank - 1;
+    for d in data.iter_mut() {
+        *d = lut[*d as usize];
+    }
+    for (&w, &start) in words.iter().zip(&starts) {
+        let plane = &mut data[start..start + w * width * lines];
+        match (w, max_value < 1 << 14) {
+            (1, true) => wavelet::<true, 1>(plane, width, lines),
+            (1, false) => wavelet::<false, 1>(plane, width, lines),
+            (_, true) => wavelet::<true, 2>(plane, width, lines),
+            (_, false) => wavelet::<false, 2>(plane, width, lines),
+        }
+    }
+
+    let mut out = Vec::with_capacity(raw.len() / 2);
+    out.extend_from_slice(&(min_nz as u16).to_le_bytes());
+    out.extend_from_slice(&(max_nz as u16).to_le_bytes());
+    if min_nz <= max_nz {
+        out.extend_from_slice(&bitmap[min_nz..=max_nz]);
+    }
+    let length_at = out.len();
+    out.extend_from_slice(&[0; 4]);
+    huffman(
+        data,
+        &mut out,
+        &mut s.freq,
+        &mut s.odd,
+        &mut s.lengths,
+        &mut s.codes,
+        &mut s.shorts,
+    );
+    let length = (out.len() - length_at - 4) as u32;
+    out[length_at..length_at + 4].copy_from_slice(&length.to_le_bytes());
+    if out.len() >= raw.len() {
+        return raw.to_vec();
+    }
+    out
+}
+
+/// OpenEXR's 14-bit Haar step: the mean and the difference, as signed 16-bit values.
+#[inline(always)]
+fn enc14(a: u16, b: u16) -> (u16, u16) {
+    let (a, b) = (a as i16 as i32, b as i16 as i32);
+    (((a + b) >> 1) as u16, (a - b) as u16)
+}
+
+/// OpenEXR's modular 16-bit Haar step (values of the full 16 bits), without its branch: a
+/// negative difference moves the mean by 2^15, modulo 2^16, which flips its top bit.
+#[inline(always)]
+fn enc16(a: u16, b: u16) -> (u16, u16) {
+    let ao = (a as i32 + 0x8000) & 0xffff;
+    let b = b as i32;
+    let d = ao - b;
+    let m = ((ao + b) >> 1) ^ ((d >> 31) & 0x8000);
+    (m as u16, d as u16)
+}
+
+/// OpenEXR's 2D wavelet encoding (`wav2Encode`) in place, over a plane of `nx` by `ny`
+/// samples of `W` words each (each word its own wavelet, as OpenEXR runs one per word
+/// offset); `W14` when every value is below 2^14.
+fn wavelet<const W14: bool, const W: usize>(d: &mut [u16], nx: usize, ny: usize) {
+    let enc = if W14 { enc14 } else { enc16 };
+    let row = nx * W;
+    let n = nx.min(ny);
+    let mut p = 1;
+    while 2 * p <= n {
+        let p2 = 2 * p;
+        // the columns of 2x2 squares, as OpenEXR's pointer loops (`nx - p2` inclusive)
+        let squares = (nx - p2) / p2 + 1;
+        let odd_column = nx & p != 0;
+        let mut y = 0;
+        while y + p2 <= ny {
+            let (top, bottom) = d[y * row..].split_at_mut(p * row);
+            let (top, bottom) = (&mut top[..row], &mut bottom[..row]);
+            if p == 1 {
+                for (t, b) in top
+                    .chunks_exact_mut(2 * W)
+                    .zip(bottom.chunks_exact_mut(2 * W))
+                    .take(squares)
+                {
+                    for k in 0..W {
+                        let (i00, i01) = enc(t[k], t[W + k]);
+                        let (i10, i11) = enc(b[k], b[W + k]);
+                        (t[k], b[k]) = enc(i00, i10);
+                        (t[W + k], b[W + k]) = enc(i01, i11);
+                    }
+                }
+            } else {
+                for x in (0..squares).map(|i| i * p2 * W) {
+                    for k in x..x + W {
+                        let k1 = k + p * W;
+                        let (i00, i01) = enc(top[k], top[k1]);
+                        let (i10, i11) = enc(bottom[k], bottom[k1]);
+                        (top[k], bottom[k]) = enc(i00, i10);
+                        (top[k1], bottom[k1]) = enc(i01, i11);
+                    }
+                }
+            }
+            if odd_column {
+                for k in squares * p2 * W..squares * p2 * W + W {
+                    (top[k], bottom[k]) = enc(top[k], bottom[k]);
+                }
+            }
+            y += p2;
+        }
+        // an odd line
+        if ny & p != 0 {
+            let line = &mut d[y * row..(y + 1) * row];
+            for x in (0..squares).map(|i| i * p2 * W) {
+                for k in x..x + W {
+                    let k1 = k + p * W;
+                    (line[k], line[k1]) = enc(line[k], line[k1]);
+                }
+            }
+        }
+        p = p2;
+    }
+}
+
+/// MSB-first bits into bytes, as OpenEXR's Huffman coder packs them. The bits not yet
+/// whole bytes wait at the top of `acc`; every put stores all 8 bytes of `acc` at the end of
+/// `out` and keeps the whole ones, so no branch depends on the data.
+struct Bits<'a> {
+    out: &'a mut Vec<u8>,
+    /// Bytes of `out` written; `out` is 8 bytes longer (or more) while putting.
+    len: usize,
+    acc: u64,
+    /// Bits at the top of `acc` (fewer than 8 between calls).
+    n: u32,
+}
+
+impl<'a> Bits<'a> {
+    fn new(out: &'a mut Vec<u8>) -> Self {
+        let len = out.len();
+        Bits {
+            out,
+            len,
+            acc: 0,
+            n: 0,
+        }
+    }
+
+    /// The `bits` low bits of `value` (the bits above them zero).
+    #[inline(always)]
+    fn put(&mut self, bits: u32, value: u64) {
+        debug_assert!(bits <= MAX_CODE_BITS && value >> bits == 0);
+        if bits > 56 {
+            self.put_long(bits, value);
+            return;
+        }
+        if self.out.len() < self.len + 8 {
+            self.out.resize(2 * self.len + 64, 0);
+        }
+        self.n += bits;
+        self.acc |= value << (64 - self.n);
+        self.out[self.len..self.len + 8].copy_from_slice(&self.acc.to_be_bytes());
+        let whole = self.n & !7;
+        self.len += (whole / 8) as usize;
+        self.acc <<= whole;
+        self.n -= whole;
+    }
+
+    #[cold]
+    fn put_long(&mut self, bits: u32, value: u64) {
+        self.put(bits - 32, value >> 32);
+        self.put(32, value & 0xffff_ffff);
+    }
+
+    /// Pad the last byte with zeros and cut `out` to the bytes written; the bits written
+    /// since `start` (a byte of `out`).
+    fn finish(self, start: usize) -> usize {
+        let bits = (self.len - start) * 8 + self.n as usize;
+        let end = self.len + self.n.div_ceil(8) as usize;
+        self.out.resize(end.max(self.len + 8), 0);
+        self.out[self.len..self.len + 8].copy_from_slice(&self.acc.to_be_bytes());
+        self.out.truncate(end);
+        bits
+    }
+}
+
+/// OpenEXR's Huffman coding of `data` (`hufCompress`), appended to `out`: five
+/// little-endian u32 (the smallest and largest symbol in the table, the table's bytes, the
+/// code's bits, 0), the code-length table, the code. `freq`, `lengths` and `codes` are
+/// scratch tables of [`SYMBOLS`] entries.
+fn huffman(
+    data: &[u16],
+    out: &mut Vec<u8>,
+    freq: &mut [u32],
+    odd: &mut [u32],
+    lengths: &mut [u32],
+    codes: &mut [u64],
+    shorts: &mut [u32],
+) {
+    if data.is_empty() {
+        return;
+    }
+    // two tables, even and odd words, so that a run of one symbol does not wait on its own
+    // stores
+    freq.fill(0);
+    odd.fill(0);
+    let pairs = data.chunks_exact(2);
+    if let [last] = pairs.remainder() {
+        freq[*last as usize] += 1;
+    }
+    for pair in pairs {
+        freq[pair[0] as usize] += 1;
+        odd[pair[1] as usize] += 1;
+    }
+    for (f, &o) in freq.iter_mut().zip(odd.iter()) {
+        *f += o;
+    }
+    let lo = freq.iter().position(|&f| f != 0).unwrap_or(0);
+    let hi = freq.iter().rposition(|&f| f != 0).unwrap_or(0);
+    // the run-length symbol, after the largest value, counted once
+    let rle = hi + 1;
+    freq[rle] = 1;
+    code_lengths(&freq[lo..=rle], &mut lengths[lo..=rle]);
+    canonical(&lengths[lo..=rle], &mut codes[lo..=rle]);
+
+    let header = out.len();
+    out.extend_from_slice(&[0; 20]);
+    let table = out.len();
+    pack_lengths(&lengths[lo..=rle], out);
+    let table_bytes = out.len() - table;
+    let code_start = out.len();
+    let longest = lengths[lo..=rle].iter().max().copied().unwrap_or(0);
+    let nbits = if longest <= SHORT_CODE_BITS {
+        // half the table's bytes in the cache: codes and lengths packed in 32 bits
+        let short = &mut shorts[lo..=rle];
+        for (s, &c) in short.iter_mut().zip(&codes[lo..=rle]) {
+            *s = c as u32;
+        }
+        emit(data, shorts, rle, out, code_start)
+    } else {
+        emit(data, codes, rle, out, code_start)
+    };
+    for (k, v) in [lo, rle, table_bytes, nbits, 0].into_iter().enumerate() {
+        out[header + 4 * k..header + 4 * k + 4].copy_from_slice(&(v as u32).to_le_bytes());
+    }
+}
+
+/// Codes of at most this many bits pack with their length into 32 bits.
+const SHORT_CODE_BITS: u32 = 26;
+
+/// A symbol's code and its length packed as `code << 6 | length`.
+trait Packed: Copy {
+    /// Codes of at most [`SHORT_CODE_BITS`].
+    const SHORT: bool;
+    fn unpack(self) -> (u64, u32);
+}
+
+impl Packed for u64 {
+    const SHORT: bool = false;
+    #[inline(always)]
+    fn unpack(self) -> (u64, u32) {
+        (self >> 6, (self & 63) as u32)
+    }
+}
+
+impl Packed for u32 {
+    const SHORT: bool = true;
+    #[inline(always)]
+    fn unpack(self) -> (u64, u32) {
+        ((self >> 6) as u64, self & 63)
+    }
+}
+
+/// The code of `data` appended to `out`, runs of a symbol shortened with the run-length
+/// symbol `rle` where that is shorter; the bits written.
+#[inline(never)]
+fn emit<C: Packed>(
+    data: &[u16],
+    codes: &[C],
+    rle: usize,
+    out: &mut Vec<u8>,
+    start: usize,
+) -> usize {
+    let mut bits = Bits::new(out);
+    let (rcode, rlen) = codes[rle].unpack();
+    let n = data.len();
+    let mut i = 0;
+    while i < n {
+        // 16 symbols none of which equals the next: no run to look for
+        if let Some(chunk) = data.get(i..i + 17) {
+            let (a, b) = (&chunk[..16], &chunk[1..]);
+            if a.iter().zip(b).all(|(x, y)| x != y) {
+                if C::SHORT {
+                    // two codes of at most 26 bits in one put
+                    for pair in a.chunks_exact(2) {
+                        let (c0, l0) = codes[pair[0] as usize].unpack();
+                        let (c1, l1) = codes[pair[1] as usize].unpack();
+                        bits.put(l0 + l1, c0 << l1 | c1);
+                    }
+                } else {
+                    for &s in a {
+                        let (code, len) = codes[s as usize].unpack();
+                        bits.put(len, code);
+                    }
+                }
+                i += 16;
+                continue;
+            }
+        }
+        let s = data[i];
+        let (code, len) = codes[s as usize].unpack();
+        // a run of at most 256 copies: the symbol, then the run-length symbol and the
+        // repeats in 8 bits where that is shorter
+        let end = (i + 256).min(n);
+        let mut j = i + 1;
+        while j < end && data[j] == s {
+            j += 1;
+        }
+        let run = (j - i - 1) as u32;
+        if run == 0 {
+            bits.put(len, code);
+        } else if len + rlen + 8 < len * run {
+            bits.put(len, code);
+            bits.put(rlen, rcode);
+            bits.put(8, run as u64);
+        } else {
+            for _ in 0..=run {
+                bits.put(len, code);
+            }
+        }
+        i = j;
+    }
+    bits.finish(start)
+}
+
+/// Optimal code lengths (into `lengths`) for the symbols of frequencies `freq` (0 for those
+/// that do not occur): the symbols that occur sorted by frequency (a counting sort for the
+/// many rare ones), then Moffat and Katajainen's in-place construction over the sorted
+/// weights.
+fn code_lengths(freq: &[u32], lengths: &mut [u32]) {
+    // the symbols that occur, gathered without a branch
+    let mut present = vec![0u32; freq.len()];
+    let mut k = 0;
+    for (s, &f) in freq.iter().enumerate() {
+        present[k] = s as u32;
+        k += (f != 0) as usize;
+    }
+    present.truncate(k);
+    // counting sort of them by frequency, frequencies below `SMALL` by bucket
+    const SMALL: usize = 1024;
+    let mut count = vec![0u32; SMALL + 1];
+    let mut large: Vec<(u32, u32)> = Vec::new();
+    for &s in &present {
+        let f = freq[s as usize];
+        if f as usize >= SMALL {
+            large.push((f, s));
+        } else {
+            count[f as usize] += 1;
+        }
+    }
+    large.sort_unstable();
+    let mut start = 0u32;
+    for c in count.iter_mut() {
+        let n = *c;
+        *c = start;
+        start += n;
+    }
+    let n = present.len();
+    let mut order = vec![0u32; n];
+    let mut weight = vec![0u32; n];
+    for &s in &present {
+        let f = freq[s as usize];
+        if (f as usize) < SMALL {
+            let at = count[f as usize] as usize;
+            count[f as usize] += 1;
+            order[at] = s;
+            weight[at] = f;
+        }
+    }
+    for (k, &(f, s)) in large.iter().enumerate() {
+        order[start as usize + k] = s;
+        weight[start as usize + k] = f;
+    }
+    minimum_redundancy(&mut weight);
+    lengths.fill(0);
+    for (&s, &l) in order.iter().zip(&weight) {
+        lengths[s as usize] = l;
+    }
+    debug_assert!(lengths.iter().all(|&l| l <= MAX_CODE_BITS));
+}
+
+/// Moffat and Katajainen's in-place minimum-redundancy code ("In-place calculation of
+/// minimum-redundancy codes", 1995): `a` holds weights in increasing order and is left
+/// holding each one's code length. Three passes: pair the two lightest of leaves and
+/// internal nodes, recording parents; depths of the internal nodes from the root down;
+/// leaf depths from the counts of internal nodes per level.
+fn minimum_redundancy(a: &mut [u32]) {
+    let n = a.len();
+    match n {
+        0 => return,
+        1 => {
+            a[0] = 1;
+            return;
+        }
+        _ => {}
+    }
+    a[0] += a[1];
+    let (mut root, mut leaf) = (0usize, 2usize);
+    for next in 1..n - 1 {
+        // the first of the pair
+        if leaf >= n || a[root] < a[leaf] {
+            a[next] = a[root];
+            a[root] = next as u32;
+            root += 1;
+        } else {
+            a[next] = a[leaf];
+            leaf += 1;
+        }
+        // the second
+        if leaf >= n || (root < next && a[root] < a[leaf]) {
+            a[next] += a[root];
+            a[root] = next as u32;
+            root += 1;
+        } else {
+            a[next] += a[leaf];
+            leaf += 1;
+        }
+    }
+    a[n - 2] = 0;
+    for next in (0..n - 2).rev() {
+        a[next] = a[a[next] as usize] + 1;
+    }
+    let (mut avail, mut used, mut depth) = (1usize, 0usize, 0u32);
+    let mut root = n as isize - 2;
+    let mut next = n as isize - 1;
+    while avail > 0 {
+        while root >= 0 && a[root as usize] == depth {
+            used += 1;
+            root -= 1;
+        }
+        while avail > used {
+            a[next as usize] = depth;
+            next -= 1;
+            avail -= 1;
+        }
+        avail = 2 * used;
+        depth += 1;
+        used = 0;
+    }
+}
+
+/// The canonical codes for `lengths`, as OpenEXR assigns them from the lengths alone
+/// (`hufCanonicalCodeTable`: per length, consecutive codes in symbol order, longer codes
+/// below shorter ones): per symbol `code << 6 | length` into `codes`.
+fn canonical(lengths: &[u32], codes: &mut [u64]) {
+    let mut first = [0u64; 59];
+    for &l in lengths {
+        first[l as usize] += 1;
+    }
+    let mut c = 0u64;
+    for l in (1..=58).rev() {
+        let next = (c + first[l]) >> 1;
+        first[l] = c;
+        c = next;
+    }
+    for (code, &l) in codes.iter_mut().zip(lengths) {
+        *code = if l == 0 {
+            0
+        } else {
+            let c = first[l as usize];
+            first[l as usize] += 1;
+            c << 6 | l as u64
+        };
+    }
+}
+
+/// The code-length table (`hufPackEncTable`): 6 bits per length, zero runs shortened.
+fn pack_lengths(lengths: &[u32], out: &mut Vec<u8>) {
+    let mut bits = Bits::new(out);
+    let mut i = 0;
+    while i < lengths.len() {
+        let l = lengths[i];
+        if l == 0 {
+            let mut run = 1;
+            while i + run < lengths.len() && run < LONGEST_LONG_RUN && lengths[i + run] == 0 {
+                run += 1;
+            }
+            if run >= 2 {
+                if run >= SHORTEST_LONG_RUN {
+                    bits.put(6, LONG_ZERO_RUN);
+                    bits.put(8, (run - SHORTEST_LONG_RUN) as u64);
+                } else {
+                    bits.put(6, SHORT_ZERO_RUN + run as u64 - 2);
+                }
+                i += run;
+                continue;
+            }
+        }
+        bits.put(6, l as u64);
+        i += 1;
+    }
+    bits.finish(0);
+}
+
+#[cfg(test)]
+#[path = "piz_tests.rs"]
+mod tests;
