@@ -31,22 +31,38 @@ const MAX_CODE_BITS: u32 = 58;
 struct Scratch {
     data: Vec<u16>,
     lut: Vec<u16>,
+    seen: Vec<u8>,
+    huffman: Tables,
+}
+
+/// The Huffman coder's tables, of [`SYMBOLS`] entries each but `present`.
+struct Tables {
+    /// Frequencies (of the even words, while counting).
     freq: Vec<u32>,
+    /// Frequencies of the odd words, while counting.
     odd: Vec<u32>,
     lengths: Vec<u32>,
+    /// `code << 6 | length`.
     codes: Vec<u64>,
+    /// `codes` in 32 bits, when every code fits.
     shorts: Vec<u32>,
+    /// The symbols that occur, relative to the first.
+    present: Vec<u32>,
 }
 
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch {
         data: Vec::new(),
         lut: vec![0; 65536],
-        freq: vec![0; SYMBOLS],
-        odd: vec![0; SYMBOLS],
-        lengths: vec![0; SYMBOLS],
-        codes: vec![0; SYMBOLS],
-        shorts: vec![0; SYMBOLS],
+        seen: vec![0; 65536],
+        huffman: Tables {
+            freq: vec![0; SYMBOLS],
+            odd: vec![0; SYMBOLS],
+            lengths: vec![0; SYMBOLS],
+            codes: vec![0; SYMBOLS],
+            shorts: vec![0; SYMBOLS],
+            present: Vec::new(),
+        },
     });
 }
 
@@ -78,6 +94,9 @@ fn encode(raw: &[u8], width: usize, lines: usize, words: &[usize], s: &mut Scrat
     data.clear();
     data.resize(raw.len() / 2, 0);
     let mut bitmap = [0u8; BITMAP_BYTES];
+    // which values occur, a byte each (a store per word where the bitmap would load too)
+    let seen = &mut s.seen;
+    seen.fill(0);
     let starts: Vec<usize> = words
         .iter()
         .scan(0, |at, &w| {
@@ -94,11 +113,14 @@ fn encode(raw: &[u8], width: usize, lines: usize, words: &[usize], s: &mut Scrat
             let src = &raw[2 * line_at..2 * (line_at + n)];
             for (d, b) in dst.iter_mut().zip(src.chunks_exact(2)) {
                 let v = u16::from_le_bytes([b[0], b[1]]);
-                bitmap[(v >> 3) as usize] |= 1 << (v & 7);
+                seen[v as usize] = 1;
                 *d = v;
             }
             line_at += n;
         }
+    }
+    for (byte, seen) in bitmap.iter_mut().zip(seen.chunks_exact(8)) {
+        *byte = seen.iter().enumerate().fold(0, |b, (i, &s)| b | s << i);
     }
     // zero is always taken to occur, and not stored
     bitmap[0] &= !1;
@@ -143,15 +165,7 @@ fn encode(raw: &[u8], width: usize, lines: usize, words: &[usize], s: &mut Scrat
     }
     let length_at = out.len();
     out.extend_from_slice(&[0; 4]);
-    huffman(
-        data,
-        &mut out,
-        &mut s.freq,
-        &mut s.odd,
-        &mut s.lengths,
-        &mut s.codes,
-        &mut s.shorts,
-    );
+    huffman(data, &mut out, &mut s.huffman);
     let length = (out.len() - length_at - 4) as u32;
     out[length_at..length_at + 4].copy_from_slice(&length.to_le_bytes());
     if out.len() >= raw.len() {
@@ -178,6 +192,9 @@ fn enc16(a: u16, b: u16) -> (u16, u16) {
     (m as u16, d as u16)
 }
 
+/// Words the wavelet's first level takes at a time.
+const LANES: usize = 16;
+
 /// OpenEXR's 2D wavelet encoding (`wav2Encode`) in place, over a plane of `nx` by `ny`
 /// samples of `W` words each (each word its own wavelet, as OpenEXR runs one per word
 /// offset); `W14` when every value is below 2^14.
@@ -196,10 +213,36 @@ fn wavelet<const W14: bool, const W: usize>(d: &mut [u16], nx: usize, ny: usize)
             let (top, bottom) = d[y * row..].split_at_mut(p * row);
             let (top, bottom) = (&mut top[..row], &mut bottom[..row]);
             if p == 1 {
+                // 16 words of each corner at a time, in arrays the compiler vectorizes
+                let group = 2 * LANES;
+                let grouped = squares * W / LANES;
                 for (t, b) in top
+                    .chunks_exact_mut(group)
+                    .zip(bottom.chunks_exact_mut(group))
+                    .take(grouped)
+                {
+                    let corner = |row: &[u16], right: usize| -> [u16; LANES] {
+                        std::array::from_fn(|j| row[(j / W) * 2 * W + right * W + j % W])
+                    };
+                    let (mut a, mut b1) = (corner(t, 0), corner(t, 1));
+                    let (mut c, mut d) = (corner(b, 0), corner(b, 1));
+                    for j in 0..LANES {
+                        let (i00, i01) = enc(a[j], b1[j]);
+                        let (i10, i11) = enc(c[j], d[j]);
+                        (a[j], c[j]) = enc(i00, i10);
+                        (b1[j], d[j]) = enc(i01, i11);
+                    }
+                    for j in 0..LANES {
+                        let at = (j / W) * 2 * W + j % W;
+                        (t[at], t[at + W]) = (a[j], b1[j]);
+                        (b[at], b[at + W]) = (c[j], d[j]);
+                    }
+                }
+                let rest = grouped * group;
+                for (t, b) in top[rest..]
                     .chunks_exact_mut(2 * W)
-                    .zip(bottom.chunks_exact_mut(2 * W))
-                    .take(squares)
+                    .zip(bottom[rest..].chunks_exact_mut(2 * W))
+                    .take(squares - grouped * LANES / W)
                 {
                     for k in 0..W {
                         let (i00, i01) = enc(t[k], t[W + k]);
@@ -303,17 +346,16 @@ impl<'a> Bits<'a> {
 
 /// OpenEXR's Huffman coding of `data` (`hufCompress`), appended to `out`: five
 /// little-endian u32 (the smallest and largest symbol in the table, the table's bytes, the
-/// code's bits, 0), the code-length table, the code. `freq`, `lengths` and `codes` are
-/// scratch tables of [`SYMBOLS`] entries.
-fn huffman(
-    data: &[u16],
-    out: &mut Vec<u8>,
-    freq: &mut [u32],
-    odd: &mut [u32],
-    lengths: &mut [u32],
-    codes: &mut [u64],
-    shorts: &mut [u32],
-) {
+/// code's bits, 0), the code-length table, the code.
+fn huffman(data: &[u16], out: &mut Vec<u8>, tables: &mut Tables) {
+    let Tables {
+        freq,
+        odd,
+        lengths,
+        codes,
+        shorts,
+        present,
+    } = tables;
     if data.is_empty() {
         return;
     }
@@ -337,21 +379,22 @@ fn huffman(
     // the run-length symbol, after the largest value, counted once
     let rle = hi + 1;
     freq[rle] = 1;
-    code_lengths(&freq[lo..=rle], &mut lengths[lo..=rle]);
-    canonical(&lengths[lo..=rle], &mut codes[lo..=rle]);
+    // the symbols that occur, relative to `lo`, and their codes
+    present_symbols(&freq[lo..=rle], present);
+    code_lengths_of(&freq[lo..=rle], present, &mut lengths[lo..=rle]);
+    canonical(present, &lengths[lo..=rle], &mut codes[lo..=rle]);
 
     let header = out.len();
     out.extend_from_slice(&[0; 20]);
     let table = out.len();
-    pack_lengths(&lengths[lo..=rle], out);
+    pack_lengths(present, &lengths[lo..=rle], rle + 1 - lo, out);
     let table_bytes = out.len() - table;
     let code_start = out.len();
-    let longest = lengths[lo..=rle].iter().max().copied().unwrap_or(0);
-    let nbits = if longest <= SHORT_CODE_BITS {
+    let longest = present.iter().map(|&s| lengths[lo + s as usize]).max();
+    let nbits = if longest.unwrap_or(0) <= SHORT_CODE_BITS {
         // half the table's bytes in the cache: codes and lengths packed in 32 bits
-        let short = &mut shorts[lo..=rle];
-        for (s, &c) in short.iter_mut().zip(&codes[lo..=rle]) {
-            *s = c as u32;
+        for &s in present.iter() {
+            shorts[lo + s as usize] = codes[lo + s as usize] as u32;
         }
         emit(data, shorts, rle, out, code_start)
     } else {
@@ -454,20 +497,33 @@ fn emit<C: Packed>(
 /// that do not occur): the symbols that occur sorted by frequency (a counting sort for the
 /// many rare ones), then Moffat and Katajainen's in-place construction over the sorted
 /// weights.
+#[cfg(test)]
 fn code_lengths(freq: &[u32], lengths: &mut [u32]) {
-    // the symbols that occur, gathered without a branch
-    let mut present = vec![0u32; freq.len()];
+    let mut present = Vec::new();
+    present_symbols(freq, &mut present);
+    code_lengths_of(freq, &present, lengths);
+}
+
+/// The symbols of nonzero frequency in `freq`, in order, into `present` (gathered without a
+/// branch).
+fn present_symbols(freq: &[u32], present: &mut Vec<u32>) {
+    present.clear();
+    present.resize(freq.len(), 0);
     let mut k = 0;
     for (s, &f) in freq.iter().enumerate() {
         present[k] = s as u32;
         k += (f != 0) as usize;
     }
     present.truncate(k);
+}
+
+/// [`code_lengths`] given the symbols that occur (`present`, in order).
+fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32]) {
     // counting sort of them by frequency, frequencies below `SMALL` by bucket
     const SMALL: usize = 1024;
     let mut count = vec![0u32; SMALL + 1];
     let mut large: Vec<(u32, u32)> = Vec::new();
-    for &s in &present {
+    for &s in present {
         let f = freq[s as usize];
         if f as usize >= SMALL {
             large.push((f, s));
@@ -485,7 +541,7 @@ fn code_lengths(freq: &[u32], lengths: &mut [u32]) {
     let n = present.len();
     let mut order = vec![0u32; n];
     let mut weight = vec![0u32; n];
-    for &s in &present {
+    for &s in present {
         let f = freq[s as usize];
         if (f as usize) < SMALL {
             let at = count[f as usize] as usize;
@@ -568,11 +624,12 @@ fn minimum_redundancy(a: &mut [u32]) {
 
 /// The canonical codes for `lengths`, as OpenEXR assigns them from the lengths alone
 /// (`hufCanonicalCodeTable`: per length, consecutive codes in symbol order, longer codes
-/// below shorter ones): per symbol `code << 6 | length` into `codes`.
-fn canonical(lengths: &[u32], codes: &mut [u64]) {
+/// below shorter ones): `code << 6 | length` into `codes` for each symbol of `present` (the
+/// symbols of nonzero length, in order; the other entries are left as they are).
+fn canonical(present: &[u32], lengths: &[u32], codes: &mut [u64]) {
     let mut first = [0u64; 59];
-    for &l in lengths {
-        first[l as usize] += 1;
+    for &s in present {
+        first[lengths[s as usize] as usize] += 1;
     }
     let mut c = 0u64;
     for l in (1..=58).rev() {
@@ -580,42 +637,40 @@ fn canonical(lengths: &[u32], codes: &mut [u64]) {
         first[l] = c;
         c = next;
     }
-    for (code, &l) in codes.iter_mut().zip(lengths) {
-        *code = if l == 0 {
-            0
-        } else {
-            let c = first[l as usize];
-            first[l as usize] += 1;
-            c << 6 | l as u64
-        };
+    for &s in present {
+        let l = lengths[s as usize];
+        let code = first[l as usize];
+        first[l as usize] += 1;
+        codes[s as usize] = code << 6 | l as u64;
     }
 }
 
-/// The code-length table (`hufPackEncTable`): 6 bits per length, zero runs shortened.
-fn pack_lengths(lengths: &[u32], out: &mut Vec<u8>) {
+/// The code-length table (`hufPackEncTable`) of `n` symbols: 6 bits per length, zero runs
+/// shortened; `present` lists the symbols of nonzero length, in order (the others' are 0).
+fn pack_lengths(present: &[u32], lengths: &[u32], n: usize, out: &mut Vec<u8>) {
     let mut bits = Bits::new(out);
-    let mut i = 0;
-    while i < lengths.len() {
-        let l = lengths[i];
-        if l == 0 {
-            let mut run = 1;
-            while i + run < lengths.len() && run < LONGEST_LONG_RUN && lengths[i + run] == 0 {
-                run += 1;
+    let zeros = |bits: &mut Bits, mut gap: usize| {
+        while gap > 0 {
+            let run = gap.min(LONGEST_LONG_RUN);
+            if run >= SHORTEST_LONG_RUN {
+                bits.put(6, LONG_ZERO_RUN);
+                bits.put(8, (run - SHORTEST_LONG_RUN) as u64);
+            } else if run >= 2 {
+                bits.put(6, SHORT_ZERO_RUN + run as u64 - 2);
+            } else {
+                bits.put(6, 0);
             }
-            if run >= 2 {
-                if run >= SHORTEST_LONG_RUN {
-                    bits.put(6, LONG_ZERO_RUN);
-                    bits.put(8, (run - SHORTEST_LONG_RUN) as u64);
-                } else {
-                    bits.put(6, SHORT_ZERO_RUN + run as u64 - 2);
-                }
-                i += run;
-                continue;
-            }
+            gap -= run;
         }
-        bits.put(6, l as u64);
-        i += 1;
+    };
+    let mut next = 0;
+    for &s in present {
+        let s = s as usize;
+        zeros(&mut bits, s - next);
+        bits.put(6, lengths[s] as u64);
+        next = s + 1;
     }
+    zeros(&mut bits, n - next);
     bits.finish(0);
 }
 
