@@ -203,33 +203,35 @@ pub struct Kernels {
 /// ~7.6, wide1 ~4.9). Reflection and refraction rays are coherent off `phong`'s floor (packet
 /// twice as fast as wide there) and scattered after a refraction (bench incoherent: wide1
 /// ~3.7, hybrid8 ~3.4, packet8 ~2.8), so they go hybrid, which keeps a packet while its lanes
-/// agree. 16-ray packets (`Packet16`, AVX-512) for camera and shadow rays rendered in the
-/// same time (1920x1080, one thread, 7 alternating runs, whole-process CPU time: `phong`
-/// 1.01x, `cubemap` 1.00x, `refraction` 1.02x; same bytes): a render's queues are tile-local
-/// and its camera and shadow phases are a fifth of the time, so packets of 8 stay there.
+/// agree.
+///
+/// On AVX-512 the rays of generations 0 and 1 (camera rays, their hits' shadow rays, and the
+/// reflection and refraction rays of those hits, all in pixel order) go in 16-ray packets
+/// (`Packet16`). On an AMD EPYC Zen 5 (2026-12-07, 1920x1080, one thread, `--stats`) they
+/// took `phong`'s camera phase from 0.033 to 0.024 thread-s and its reflections from 0.027
+/// to 0.018; whole-process CPU time against 8-ray packets and `hybrid8`, medians of 7 and 11
+/// alternating pairs: `phong` 0.92x and 0.90x, `cubemap` 0.92x and 0.99x, `refraction`
+/// 0.99x and 1.01x; the same bytes. (On the Xeon of 2026-12-04 16-ray packets for camera and
+/// shadow rays had rendered in the same time as 8: `phong` 1.01x, `cubemap` 1.00x,
+/// `refraction` 1.02x.)
 ///
 /// Later generations on AVX-512 take `Hybrid16`, whose 16 rays go down the wide tree together
 /// when they share a direction octant, as the binned queues' packets mostly do (`refraction`
 /// at 1920x1080 on one thread, `--stats`, two runs each: the later shadow rays' phase took
 /// 0.130-0.133 thread-s against packet8's 0.198-0.212, the binned reflection and refraction
 /// rays 0.62-0.66 against hybrid8's 0.71-0.81; `phong`, whose later generations are few,
-/// level). The rays of camera-ray hits stay on packets of 8: on `phong` `Hybrid16` took its
-/// shadow phase from 0.097 to 0.122 thread-s and its reflections from 0.046 to 0.059. Without
-/// AVX-512 `Hybrid16` is two `hybrid8` calls, so the 8-ray kernels stay everywhere.
+/// level; `Packet16` there took `refraction`'s shadow phase from 0.09 to 0.14 and its
+/// secondary from 0.48 to 0.61). Without AVX-512 the 16-ray kernels are two 8-ray calls, so
+/// the 8-ray kernels stay everywhere.
 pub fn auto() -> Kernels {
-    let later = |k| {
-        if crate::accel::packet16::available() {
-            Kernel::Hybrid16
-        } else {
-            k
-        }
-    };
+    let avx512 = crate::accel::packet16::available();
+    let pick = |k16, k| if avx512 { k16 } else { k };
     Kernels {
-        camera: Kernel::Packet,
-        shadow: Kernel::Packet,
-        secondary: Kernel::Hybrid,
-        shadow_later: later(Kernel::Packet),
-        secondary_later: later(Kernel::Hybrid),
+        camera: pick(Kernel::Packet16, Kernel::Packet),
+        shadow: pick(Kernel::Packet16, Kernel::Packet),
+        secondary: pick(Kernel::Packet16, Kernel::Hybrid),
+        shadow_later: pick(Kernel::Hybrid16, Kernel::Packet),
+        secondary_later: pick(Kernel::Hybrid16, Kernel::Hybrid),
     }
 }
 
