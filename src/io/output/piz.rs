@@ -30,17 +30,18 @@ const MAX_CODE_BITS: u32 = 58;
 /// 2 MB of tables).
 struct Scratch {
     data: Vec<u16>,
-    lut: Vec<u16>,
-    seen: Vec<u8>,
+    /// Each value's rank (an array, so that a `u16` index needs no bounds check).
+    lut: Box<[u16; 65536]>,
+    seen: Box<[u8; 65536]>,
     huffman: Tables,
 }
 
 /// The Huffman coder's tables, of [`SYMBOLS`] entries each but `present`.
 struct Tables {
     /// Frequencies (of the even words, while counting).
-    freq: Vec<u32>,
+    freq: Box<[u32; SYMBOLS]>,
     /// Frequencies of the odd words, while counting.
-    odd: Vec<u32>,
+    odd: Box<[u32; SYMBOLS]>,
     lengths: Vec<u32>,
     /// `code << 6 | length`.
     codes: Vec<u64>,
@@ -50,14 +51,22 @@ struct Tables {
     present: Vec<u32>,
 }
 
+/// A zeroed array on the heap (not through the stack).
+fn zeroed<T: Clone + Default, const N: usize>() -> Box<[T; N]> {
+    vec![T::default(); N]
+        .into_boxed_slice()
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("N entries"))
+}
+
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch {
         data: Vec::new(),
-        lut: vec![0; 65536],
-        seen: vec![0; 65536],
+        lut: zeroed(),
+        seen: zeroed(),
         huffman: Tables {
-            freq: vec![0; SYMBOLS],
-            odd: vec![0; SYMBOLS],
+            freq: zeroed(),
+            odd: zeroed(),
             lengths: vec![0; SYMBOLS],
             codes: vec![0; SYMBOLS],
             shorts: vec![0; SYMBOLS],
@@ -95,7 +104,7 @@ fn encode(raw: &[u8], width: usize, lines: usize, words: &[usize], s: &mut Scrat
     data.resize(raw.len() / 2, 0);
     let mut bitmap = [0u8; BITMAP_BYTES];
     // which values occur, a byte each (a store per word where the bitmap would load too)
-    let seen = &mut s.seen;
+    let seen = &mut *s.seen;
     seen.fill(0);
     let starts: Vec<usize> = words
         .iter()
@@ -131,7 +140,7 @@ fn encode(raw: &[u8], width: usize, lines: usize, words: &[usize], s: &mut Scrat
     };
     // each value's rank among those that occur (zero's is 0; the entries of values that do
     // not occur are stale and never read)
-    let lut = &mut s.lut;
+    let lut = &mut *s.lut;
     lut[0] = 0;
     let mut rank = 1u32;
     for (byte, &bits) in bitmap.iter().enumerate().skip(min_nz) {
