@@ -83,14 +83,6 @@ impl ExrCompression {
             ExrCompression::Piz => C::PIZ,
         }
     }
-
-    /// Compressed by whitted's own encoders rather than the `exr` crate's.
-    fn is_whitteds(self) -> bool {
-        matches!(
-            self,
-            ExrCompression::Zip | ExrCompression::Zips | ExrCompression::Piz
-        )
-    }
 }
 
 /// AOV layers written beside the beauty image of a streamed EXR: which, and how to capture
@@ -480,12 +472,13 @@ fn write_exr<W: Write + Seek + Send>(
             let compress_and_write = |k: usize, rows: usize, data: Vec<u8>| {
                 let t = Instant::now();
                 let y = part.y0 as i32 + (k * lines) as i32;
-                let chunk = if compression.is_whitteds() {
-                    let compressed_pixels_le = if compression == ExrCompression::Piz {
-                        piz::piz_block(&data, pw, rows, &words)
-                    } else {
-                        zip_block(&data)
-                    };
+                // whitted's own encoders, else the exr crate's
+                let ours = match compression {
+                    ExrCompression::Piz => Some(piz::piz_block(&data, pw, rows, &words)),
+                    ExrCompression::Zip | ExrCompression::Zips => Some(zip_block(&data)),
+                    ExrCompression::Rle | ExrCompression::None => None,
+                };
+                let chunk = if let Some(compressed_pixels_le) = ours {
                     Ok(Chunk {
                         layer_index: 0,
                         compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {

@@ -201,6 +201,16 @@ fn enc16(a: u16, b: u16) -> (u16, u16) {
     (m as u16, d as u16)
 }
 
+/// One 2x2 square of the wavelet, `[top left, top right, bottom left, bottom right]`: the
+/// Haar step along the rows, then down the columns.
+#[inline(always)]
+fn square(enc: fn(u16, u16) -> (u16, u16), [a, b, c, d]: [u16; 4]) -> [u16; 4] {
+    let (i00, i01) = enc(a, b);
+    let (i10, i11) = enc(c, d);
+    let ((m0, d0), (m1, d1)) = (enc(i00, i10), enc(i01, i11));
+    [m0, m1, d0, d1]
+}
+
 /// Words the wavelet's first level takes at a time.
 const LANES: usize = 16;
 
@@ -236,10 +246,7 @@ fn wavelet<const W14: bool, const W: usize>(d: &mut [u16], nx: usize, ny: usize)
                     let (mut a, mut b1) = (corner(t, 0), corner(t, 1));
                     let (mut c, mut d) = (corner(b, 0), corner(b, 1));
                     for j in 0..LANES {
-                        let (i00, i01) = enc(a[j], b1[j]);
-                        let (i10, i11) = enc(c[j], d[j]);
-                        (a[j], c[j]) = enc(i00, i10);
-                        (b1[j], d[j]) = enc(i01, i11);
+                        [a[j], b1[j], c[j], d[j]] = square(enc, [a[j], b1[j], c[j], d[j]]);
                     }
                     for j in 0..LANES {
                         let at = (j / W) * 2 * W + j % W;
@@ -254,20 +261,16 @@ fn wavelet<const W14: bool, const W: usize>(d: &mut [u16], nx: usize, ny: usize)
                     .take(squares - grouped * LANES / W)
                 {
                     for k in 0..W {
-                        let (i00, i01) = enc(t[k], t[W + k]);
-                        let (i10, i11) = enc(b[k], b[W + k]);
-                        (t[k], b[k]) = enc(i00, i10);
-                        (t[W + k], b[W + k]) = enc(i01, i11);
+                        [t[k], t[W + k], b[k], b[W + k]] =
+                            square(enc, [t[k], t[W + k], b[k], b[W + k]]);
                     }
                 }
             } else {
                 for x in (0..squares).map(|i| i * p2 * W) {
                     for k in x..x + W {
                         let k1 = k + p * W;
-                        let (i00, i01) = enc(top[k], top[k1]);
-                        let (i10, i11) = enc(bottom[k], bottom[k1]);
-                        (top[k], bottom[k]) = enc(i00, i10);
-                        (top[k1], bottom[k1]) = enc(i01, i11);
+                        [top[k], top[k1], bottom[k], bottom[k1]] =
+                            square(enc, [top[k], top[k1], bottom[k], bottom[k1]]);
                     }
                 }
             }
