@@ -403,14 +403,20 @@ fn huffman(data: &[u16], out: &mut Vec<u8>, tables: &mut Tables) {
     let table_bytes = out.len() - table;
     let code_start = out.len();
     let longest = present.iter().map(|&s| lengths[lo + s as usize]).max();
-    let nbits = if longest.unwrap_or(0) <= SHORT_CODE_BITS {
+    let longest = longest.unwrap_or(0);
+    let nbits = if longest <= SHORT_CODE_BITS {
         // half the table's bytes in the cache: codes and lengths packed in 32 bits
         for &s in present.iter() {
             shorts[lo + s as usize] = codes[lo + s as usize] as u32;
         }
-        emit(data, shorts, rle, out, code_start)
+        // as many codes to a put as surely fit in its 56 bits
+        match longest {
+            0..=14 => emit::<u32, 4>(data, shorts, rle, out, code_start),
+            15..=18 => emit::<u32, 3>(data, shorts, rle, out, code_start),
+            _ => emit::<u32, 2>(data, shorts, rle, out, code_start),
+        }
     } else {
-        emit(data, codes, rle, out, code_start)
+        emit::<u64, 1>(data, codes, rle, out, code_start)
     };
     for (k, v) in [lo, rle, table_bytes, nbits, 0].into_iter().enumerate() {
         out[header + 4 * k..header + 4 * k + 4].copy_from_slice(&(v as u32).to_le_bytes());
@@ -422,13 +428,10 @@ const SHORT_CODE_BITS: u32 = 26;
 
 /// A symbol's code and its length packed as `code << 6 | length`.
 trait Packed: Copy {
-    /// Codes of at most [`SHORT_CODE_BITS`].
-    const SHORT: bool;
     fn unpack(self) -> (u64, u32);
 }
 
 impl Packed for u64 {
-    const SHORT: bool = false;
     #[inline(always)]
     fn unpack(self) -> (u64, u32) {
         (self >> 6, (self & 63) as u32)
@@ -436,7 +439,6 @@ impl Packed for u64 {
 }
 
 impl Packed for u32 {
-    const SHORT: bool = true;
     #[inline(always)]
     fn unpack(self) -> (u64, u32) {
         ((self >> 6) as u64, self & 63)
@@ -444,9 +446,11 @@ impl Packed for u32 {
 }
 
 /// The code of `data` appended to `out`, runs of a symbol shortened with the run-length
-/// symbol `rle` where that is shorter; the bits written.
+/// symbol `rle` where that is shorter; the bits written. Where no run can start, `PER`
+/// codes go in one put (the caller picks the most whose lengths surely fit in 56 bits): the
+/// bits are the same for every `PER`.
 #[inline(never)]
-fn emit<C: Packed>(
+fn emit<C: Packed, const PER: usize>(
     data: &[u16],
     codes: &[C],
     rle: usize,
@@ -455,27 +459,25 @@ fn emit<C: Packed>(
 ) -> usize {
     let mut bits = Bits::new(out);
     let (rcode, rlen) = codes[rle].unpack();
+    // symbols looked at together: a multiple of PER
+    let chunk = 16 - 16 % PER;
     let n = data.len();
     let mut i = 0;
     while i < n {
-        // 16 symbols none of which equals the next: no run to look for
-        if let Some(chunk) = data.get(i..i + 17) {
-            let (a, b) = (&chunk[..16], &chunk[1..]);
+        // `chunk` symbols none of which equals the next: no run to look for
+        if let Some(run) = data.get(i..i + chunk + 1) {
+            let (a, b) = (&run[..chunk], &run[1..]);
             if a.iter().zip(b).all(|(x, y)| x != y) {
-                if C::SHORT {
-                    // two codes of at most 26 bits in one put
-                    for pair in a.chunks_exact(2) {
-                        let (c0, l0) = codes[pair[0] as usize].unpack();
-                        let (c1, l1) = codes[pair[1] as usize].unpack();
-                        bits.put(l0 + l1, c0 << l1 | c1);
-                    }
-                } else {
-                    for &s in a {
+                for group in a.chunks_exact(PER) {
+                    let (mut c, mut l) = (0, 0);
+                    for &s in group {
                         let (code, len) = codes[s as usize].unpack();
-                        bits.put(len, code);
+                        c = c << len | code;
+                        l += len;
                     }
+                    bits.put(l, c);
                 }
-                i += 16;
+                i += chunk;
                 continue;
             }
         }
@@ -661,30 +663,54 @@ fn canonical(present: &[u32], lengths: &[u32], codes: &mut [u64]) {
 /// shortened; `present` lists the symbols of nonzero length, in order (the others' are 0).
 fn pack_lengths(present: &[u32], lengths: &[u32], n: usize, out: &mut Vec<u8>) {
     let mut bits = Bits::new(out);
-    let zeros = |bits: &mut Bits, mut gap: usize| {
-        while gap > 0 {
-            let run = gap.min(LONGEST_LONG_RUN);
-            if run >= SHORTEST_LONG_RUN {
-                bits.put(6, LONG_ZERO_RUN);
-                bits.put(8, (run - SHORTEST_LONG_RUN) as u64);
-            } else if run >= 2 {
-                bits.put(6, SHORT_ZERO_RUN + run as u64 - 2);
-            } else {
-                bits.put(6, 0);
-            }
-            gap -= run;
-        }
-    };
     let mut next = 0;
     for &s in present {
         let s = s as usize;
-        zeros(&mut bits, s - next);
-        bits.put(6, lengths[s] as u64);
+        let (gap_bits, gap_code) = zero_run(&mut bits, s - next);
+        // the gap's code and the length in one put
+        bits.put(gap_bits + 6, gap_code << 6 | lengths[s] as u64);
         next = s + 1;
     }
-    zeros(&mut bits, n - next);
+    let (gap_bits, gap_code) = zero_run(&mut bits, n - next);
+    bits.put(gap_bits, gap_code);
     bits.finish(0);
 }
+
+/// A run of `gap` zero lengths: the longest runs put at once while more than
+/// [`LONGEST_LONG_RUN`] are left, then the rest's code as `(bits, code)` from [`ZERO_RUNS`].
+#[inline(always)]
+fn zero_run(bits: &mut Bits, mut gap: usize) -> (u32, u64) {
+    while gap > LONGEST_LONG_RUN {
+        bits.put(
+            14,
+            LONG_ZERO_RUN << 8 | (LONGEST_LONG_RUN - SHORTEST_LONG_RUN) as u64,
+        );
+        gap -= LONGEST_LONG_RUN;
+    }
+    let (b, c) = ZERO_RUNS[gap];
+    (b as u32, c as u64)
+}
+
+/// The code of each run of 0 to [`LONGEST_LONG_RUN`] zero lengths as `(bits, code)`: none,
+/// one length 0, a short run, or the long-run code and the run in 8 bits.
+const ZERO_RUNS: [(u8, u16); LONGEST_LONG_RUN + 1] = {
+    let mut t = [(0u8, 0u16); LONGEST_LONG_RUN + 1];
+    let mut run = 1;
+    while run <= LONGEST_LONG_RUN {
+        t[run] = if run >= SHORTEST_LONG_RUN {
+            (
+                14,
+                (LONG_ZERO_RUN << 8) as u16 | (run - SHORTEST_LONG_RUN) as u16,
+            )
+        } else if run >= 2 {
+            (6, (SHORT_ZERO_RUN + run as u64 - 2) as u16)
+        } else {
+            (6, 0)
+        };
+        run += 1;
+    }
+    t
+};
 
 #[cfg(test)]
 #[path = "piz_tests.rs"]

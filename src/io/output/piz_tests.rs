@@ -199,3 +199,89 @@ proptest! {
         round_trip(width, lines, &words, pattern, seed);
     }
 }
+
+/// The encoder's time on the 32-line blocks of a rendered image, best of 9 passes (a
+/// measurement, not a test): `whitted render phong --width 1920 --height 1080
+/// --exr-compression none -o /tmp/phong.exr`, then `WHITTED_PIZ_IMAGE=/tmp/phong.exr cargo
+/// test --release --lib piz_encoder_time -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn piz_encoder_time() {
+    let Ok(path) = std::env::var("WHITTED_PIZ_IMAGE") else {
+        eprintln!("WHITTED_PIZ_IMAGE not set");
+        return;
+    };
+    let image = crate::io::image::load_exr_image(std::path::Path::new(&path)).expect("an EXR");
+    let (width, lines) = (image.width, 32);
+    // each block's lines, each line's channels B, G, R (the file's order), f32 samples
+    let blocks: Vec<Vec<u8>> = image
+        .pixels
+        .chunks(width * lines)
+        .map(|rows| {
+            let mut raw = Vec::with_capacity(rows.len() * 12);
+            for row in rows.chunks(width) {
+                for c in [2, 1, 0] {
+                    for p in row {
+                        raw.extend_from_slice(&p[c].to_le_bytes());
+                    }
+                }
+            }
+            raw
+        })
+        .collect();
+    let mut best = f64::INFINITY;
+    let mut bytes = 0;
+    for _ in 0..9 {
+        let start = std::time::Instant::now();
+        bytes = blocks
+            .iter()
+            .map(|raw| piz_block(raw, width, raw.len() / (12 * width), &[2, 2, 2]).len())
+            .sum::<usize>();
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    eprintln!(
+        "{path}: {} blocks, {bytes} bytes, best of 9 {:.2} ms",
+        blocks.len(),
+        best * 1e3
+    );
+}
+
+/// Codes put two, three or four at a time make the same bits as one at a time.
+#[test]
+fn codes_grouped_in_puts_make_the_same_bits() {
+    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        rng
+    };
+    // 300 symbols and the run-length symbol, lengths 1 to 14 (not a prefix code: the bits
+    // are compared, not decoded)
+    let rle = 300;
+    let longs: Vec<u64> = (0..=rle)
+        .map(|_| {
+            let len = 1 + next() % 14;
+            (next() & ((1 << len) - 1)) << 6 | len
+        })
+        .collect();
+    let shorts: Vec<u32> = longs.iter().map(|&c| c as u32).collect();
+    // noise with runs of every length up to 300 between
+    let mut data = Vec::new();
+    while data.len() < 20_000 {
+        let s = (next() % rle as u64) as u16;
+        let repeat = if next() % 4 == 0 { next() % 300 } else { 0 };
+        data.extend(std::iter::repeat_n(s, 1 + repeat as usize));
+    }
+    let mut one = vec![7u8];
+    let bits = emit::<u64, 1>(&data, &longs, rle, &mut one, 1);
+    for per in [2, 3, 4] {
+        let mut out = vec![7u8];
+        let b = match per {
+            2 => emit::<u32, 2>(&data, &shorts, rle, &mut out, 1),
+            3 => emit::<u32, 3>(&data, &shorts, rle, &mut out, 1),
+            _ => emit::<u32, 4>(&data, &shorts, rle, &mut out, 1),
+        };
+        assert_eq!((b, &out), (bits, &one), "{per} codes a put");
+    }
+}
