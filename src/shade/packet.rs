@@ -59,21 +59,22 @@ pub struct Shade8 {
     pub refraction: SecondaryLanes,
 }
 
-/// Per-lane loads of a hit packet, as lane arrays (inactive lanes zero).
+/// Per-lane loads of a hit packet (inactive lanes zero).
 #[derive(Default)]
 struct Gathered {
     /// Vertex normals of the hit triangle: `vn[vertex][axis][lane]`.
     vn: [[[f32; LANES]; 3]; 3],
     ng: [[f32; LANES]; 3],
-    od: [[f32; LANES]; 3],
-    /// RGB `ka kd ks kt ke kr` per lane: `kc[coefficient][channel][lane]`.
-    kc: [[[f32; LANES]; 3]; 6],
-    /// Phong exponent and index of refraction per lane.
-    n: [f32; LANES],
-    ior: [f32; LANES],
+    od: Vec3x8,
+    /// `ka kd ks kt ke kr`.
+    kc: [Vec3x8; 6],
+    /// Phong exponent and index of refraction.
+    n: F32x8,
+    ior: F32x8,
     /// Lanes whose material emits.
     emits: u32,
-    material: [u32; LANES],
+    /// The material of every active lane, when they share one.
+    uniform: Option<u32>,
 }
 
 fn gather(
@@ -85,7 +86,15 @@ fn gather(
 ) -> Gathered {
     let tri = simd::u32_lanes(hits.tri);
     let mut out = Gathered::default();
-    for i in (0..LANES).filter(|&i| bits >> i & 1 == 1) {
+    let active = || (0..LANES).filter(move |&i| bits >> i & 1 == 1);
+    let mut material = [0u32; LANES];
+    for i in active() {
+        material[i] = triangle_material(world, tri[i], insts[i]);
+    }
+    let first = material[bits.trailing_zeros() as usize % LANES];
+    let uniform = active().all(|i| material[i] == first);
+    let mut od = [[0.0; LANES]; 3];
+    for i in active() {
         let t = tri[i];
         let (g, _) = world.shading(insts[i]);
         let v = g.triangles[t as usize].map(|x| x as usize);
@@ -95,23 +104,43 @@ fn gather(
             out.vn[vk][1][i] = n.y;
             out.vn[vk][2][i] = n.z;
         }
-        let material = triangle_material(world, t, insts[i]);
-        let m = &world.scene.materials[material as usize];
-        let od = albedo(g, m, v, b[0][i], b[1][i], b[2][i]);
+        let m = &world.scene.materials[material[i] as usize];
+        let c = albedo(g, m, v, b[0][i], b[1][i], b[2][i]);
         for a in 0..3 {
             out.ng[a][i] = ng[a];
-            out.od[a][i] = od[a];
+            od[a][i] = c[a];
         }
+    }
+    out.od = vec3x8(&od);
+    if uniform {
+        // one material: its constants splatted (the inactive lanes zeroed by the mask, as
+        // the per-lane loads leave them), not 20 scalar stores per lane
+        let m = &world.scene.materials[first as usize];
+        let on = simd::mask_from_bits(bits);
+        let zero = Vec3x8::splat([0.0; 3]);
+        out.kc = [m.ka, m.kd, m.ks, m.kt, m.ke, m.kr]
+            .map(|c| Vec3x8::select(on, Vec3x8::splat(c.to_array()), zero));
+        out.n = simd::select(on, simd::splat(m.n), simd::splat(0.0));
+        out.ior = simd::select(on, simd::splat(m.ior), simd::splat(0.0));
+        out.emits = if m.emits() { bits } else { 0 };
+        out.uniform = Some(first);
+        return out;
+    }
+    let mut kc = [[[0.0; LANES]; 3]; 6];
+    let (mut n, mut ior) = ([0.0; LANES], [0.0; LANES]);
+    for i in active() {
+        let m = &world.scene.materials[material[i] as usize];
         for (k, value) in [m.ka, m.kd, m.ks, m.kt, m.ke, m.kr].into_iter().enumerate() {
             for a in 0..3 {
-                out.kc[k][a][i] = value[a];
+                kc[k][a][i] = value[a];
             }
         }
-        out.n[i] = m.n;
-        out.ior[i] = m.ior;
+        n[i] = m.n;
+        ior[i] = m.ior;
         out.emits |= (m.emits() as u32) << i;
-        out.material[i] = material;
     }
+    out.kc = kc.map(|c| vec3x8(&c));
+    (out.n, out.ior) = (simd::from_lanes(n), simd::from_lanes(ior));
     out
 }
 
@@ -174,9 +203,9 @@ pub fn shade8_in(
     let back = simd::gt(rays.d.dot(ng), zero);
     ng = Vec3x8::select(back, -ng, ng);
     n = Vec3x8::select(back, -n, n);
-    let od = vec3x8(&gl.od);
-    let [ka, kd, ks, kt, ke, kr] = gl.kc.map(|c| vec3x8(&c));
-    let (n_exp, ior) = (simd::from_lanes(gl.n), simd::from_lanes(gl.ior));
+    let od = gl.od;
+    let [ka, kd, ks, kt, ke, kr] = gl.kc;
+    let (n_exp, ior) = (gl.n, gl.ior);
 
     // ambient: Ia ka Od
     let ia = Vec3x8::splat(sc.ambient.to_array());
@@ -188,11 +217,9 @@ pub fn shade8_in(
     }
 
     // One Phong exponent for the whole packet (the usual case) is raised across lanes.
-    let first = gl.material[bits.trailing_zeros() as usize % LANES];
-    let uniform_n = (0..LANES)
-        .filter(|&i| bits >> i & 1 == 1)
-        .all(|i| gl.material[i] == first)
-        .then(|| sc.materials[first as usize].n)
+    let uniform_n = gl
+        .uniform
+        .map(|m| sc.materials[m as usize].n)
         .filter(|&e| whole_exponent(e));
 
     let v = -rays.d.normalize();
