@@ -193,8 +193,8 @@ impl<K: Kind> Walker<K> {
     }
 }
 
-/// The closest-hit walk. Hit children are visited nearest first by entry distance (two
-/// children compared, more pushed in the octant's precomputed order), and a popped entry
+/// The closest-hit walk. Hit children are pushed farthest first in the octant's
+/// precomputed order, however many there are, and popped nearest first; a popped entry
 /// farther than the closest hit so far is dropped.
 ///
 /// A node's hit leaf children are tested at the node, before its inner children are
@@ -252,9 +252,11 @@ impl Kind for ClosestHit {
         false
     }
 
-    /// From `node`, whose hit inner children are `inner` (entry distances `lo`): descend
-    /// into the nearest, pushing the others, or pop the next entry still in front of the
-    /// closest hit. `false` when there is none (the walk is over).
+    /// From `node`, whose hit inner children are `inner` (entry distances `lo`): push them,
+    /// then pop the next entry still in front of the closest hit. `false` when there is none
+    /// (the walk is over). No branch asks how many children were hit (on random rays such a
+    /// branch goes either way): every slot is written in the octant's order, farthest first,
+    /// and the stack pointer moves by the hit bit.
     #[inline(always)]
     fn advance(
         w: &mut Walker<Self>,
@@ -264,38 +266,12 @@ impl Kind for ClosestHit {
         stack: &mut [(u32, f32)],
     ) -> bool {
         if inner != 0 {
-            let rest = inner & (inner - 1);
-            if rest == 0 {
-                // one child: descend, unless a hit at this node lies before it.
-                let slot = inner.trailing_zeros() as usize;
-                if lo[slot] <= w.tfar * SLAB_FAR_SCALE {
-                    w.cur = node.child[slot];
-                    return true;
-                }
-            } else if rest & (rest - 1) == 0 {
-                // two children (the usual case): nearer first by entry distance, the other
-                // pushed.
-                let (a, b) = (
-                    inner.trailing_zeros() as usize,
-                    rest.trailing_zeros() as usize,
-                );
-                let (first, later) = if lo[b] < lo[a] { (b, a) } else { (a, b) };
-                stack[w.sp] = (node.child[later], lo[later]);
-                w.sp += 1;
-                if lo[first] <= w.tfar * SLAB_FAR_SCALE {
-                    w.cur = node.child[first];
-                    return true;
-                }
-            } else {
-                // several: push the hit ones farthest first in the octant's order (no
-                // branches: every slot is written, the pointer moves only for hit ones),
-                // then go on with the nearest (through the pop below).
-                let order = node.order[w.r.octant];
-                for k in (0..8).rev() {
-                    let slot = (order >> (3 * k) & 7) as usize;
-                    stack[w.sp] = (node.child[slot], lo[slot]);
-                    w.sp += (inner >> slot & 1) as usize;
-                }
+            // pushed farthest first, so the nearest is popped next
+            let order = node.order[w.r.octant];
+            for k in (0..8).rev() {
+                let slot = (order >> (3 * k) & 7) as usize;
+                stack[w.sp] = (node.child[slot], lo[slot]);
+                w.sp += (inner >> slot & 1) as usize;
             }
         }
         // pop the next node still in front of the closest hit.
