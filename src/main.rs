@@ -346,6 +346,7 @@ fn attach_hyphen_values(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<s
 }
 
 fn main() -> ExitCode {
+    whitted::accel::pages::keep_freed_memory();
     let cli = Cli::parse_from(attach_hyphen_values(std::env::args_os()));
     whitted::cpu::warn_if_slow_build();
     let result = match cli.command {

@@ -9,8 +9,11 @@
 //! huge pages are `always` or `never` this changes nothing; elsewhere than Linux it does
 //! nothing.
 //!
+//! Also [`keep_freed_memory`], for the command line: freed memory kept for reuse rather
+//! than handed back to the kernel and faulted in again.
+//!
 //! One of the crate's three `unsafe` places (the others: `packet16`'s AVX-512 dispatch and
-//! `wide1::interleave`'s prefetch hint), kept to the system call.
+//! `wide1::interleave`'s prefetch hint), kept to the system calls.
 
 /// Arrays smaller than this stay on small pages (a huge page is 2 MiB).
 const MIN_BYTES: usize = 4 << 20;
@@ -43,9 +46,65 @@ pub fn advise_huge<T>(v: &Vec<T>) {
     let _ = v;
 }
 
+/// Keep the memory the process frees for its own reuse. glibc's allocator hands blocks of
+/// 128 KiB and more back to the kernel when they are freed (and trims the top of its heap),
+/// so the next allocation of that size faults every page in again, zeroed by the kernel; a
+/// render frees and allocates its tiles' pixels, its row batches and its compressed EXR
+/// blocks every few megabytes. With blocks up to 32 MiB taken from the heap and the heap
+/// trimmed only past 512 MiB free, they are reused. Measured 2026-12-07 (AMD EPYC Zen 5,
+/// whole process, against the build without it, alternating runs): `cubemap` 1080p on one
+/// thread 17.2k page faults -> 11.8k, system time 0.060 -> 0.043 s, CPU 0.97x (11 pairs);
+/// `phong` 1080p 1.01x (level); `phong` 4K on two threads system time 0.067 -> 0.040 s,
+/// wall 0.97x (7 pairs). For programs (the
+/// `whitted` command calls it first): a library should not retune its host's allocator.
+/// Whether the allocator took both settings (`false` off glibc, where it does nothing).
+pub fn keep_freed_memory() -> bool {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        #[allow(unsafe_code)]
+        // SAFETY: `mallopt` sets two of glibc's allocator thresholds (it takes the
+        // allocator's lock, so any thread may call it at any time); it touches no memory of
+        // ours and every allocation stays valid.
+        unsafe {
+            libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20) == 1
+                && libc::mallopt(libc::M_TRIM_THRESHOLD, 512 << 20) == 1
+        }
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    false
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The calling thread's minor page faults so far (`/proc/thread-self/stat`, field 10).
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    fn minor_faults() -> u64 {
+        let stat = std::fs::read_to_string("/proc/thread-self/stat").unwrap();
+        // the fields after the command name, which ends at the last ')'
+        let rest = &stat[stat.rfind(')').unwrap() + 2..];
+        rest.split(' ').nth(7).unwrap().parse().unwrap()
+    }
+
+    /// Once freed memory is kept, 8 MiB freed in blocks of 100 KiB (below glibc's first
+    /// threshold, so from the heap, which it would then trim) come back without faulting
+    /// their 2,000 pages in again (without the settings: about 1,970 faults).
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn freed_memory_is_reused_without_page_faults() {
+        assert!(keep_freed_memory());
+        let blocks = || -> Vec<Vec<u8>> { (0..80).map(|k| vec![k as u8; 100 << 10]).collect() };
+        drop(std::hint::black_box(blocks()));
+        let before = minor_faults();
+        let again = std::hint::black_box(blocks());
+        let faults = minor_faults() - before;
+        assert_eq!(again[79][5], 79);
+        assert!(
+            faults < 200,
+            "{faults} page faults for 8 MiB freed and allocated again"
+        );
+    }
 
     /// Contents survive the advice, small arrays are left alone, and where the kernel offers
     /// huge pages on request, a large advised array's mapping carries the advice (`hg` in its
