@@ -243,10 +243,17 @@ pub fn decode_cubemap_capped(
     faces: [(&Path, &[u8]); 6],
     max_pixels: u64,
 ) -> Result<(CubeMap, ImageInfo)> {
+    // the six faces decoded on the pool's threads (a cube map's decode is most of a
+    // render's load); checked in face order, so the error named is the first bad face's
+    use rayon::prelude::*;
+    let decoded: Vec<Result<(Texture, ImageInfo)>> = faces
+        .par_iter()
+        .map(|&(file, bytes)| decode_texture_capped(bytes, file, max_pixels))
+        .collect();
     let mut out: Vec<Texture> = Vec::with_capacity(6);
     let mut first_info = None;
-    for (name, (file, bytes)) in CUBE_FACES.iter().zip(faces) {
-        let (tex, info) = decode_texture_capped(bytes, file, max_pixels)?;
+    for ((name, (file, _)), face) in CUBE_FACES.iter().zip(faces).zip(decoded) {
+        let (tex, info) = face?;
         if tex.width != tex.height {
             return Err(Error::image(
                 file,
@@ -318,6 +325,44 @@ pub fn load_exr_image(path: &Path) -> Result<Image> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The faces are decoded in parallel, and the error still names the first bad face in
+    /// face order, whichever thread failed first.
+    #[test]
+    fn cube_faces_decode_in_parallel_and_name_the_first_bad_face() {
+        let mut png = Vec::new();
+        image::RgbImage::from_pixel(4, 4, image::Rgb([10, 200, 30]))
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let names: Vec<std::path::PathBuf> = CUBE_FACES
+            .iter()
+            .map(|n| std::path::PathBuf::from(format!("cube/{n}.png")))
+            .collect();
+        let garbage = b"not an image".as_slice();
+        let pick = |bad: &[usize]| -> [(&Path, &[u8]); 6] {
+            std::array::from_fn(|k| {
+                let bytes = if bad.contains(&k) {
+                    garbage
+                } else {
+                    png.as_slice()
+                };
+                (names[k].as_path(), bytes)
+            })
+        };
+        let (cube, info) = decode_cubemap(pick(&[])).unwrap();
+        assert_eq!((info.width, info.height), (4, 4));
+        let texel = srgb_decode(200.0 / 255.0) as f32;
+        assert!(
+            cube.faces
+                .iter()
+                .all(|f| f.texels.iter().all(|t| t.y == texel))
+        );
+        for bad in [[2, 5], [5, 2], [0, 1]] {
+            let e = decode_cubemap(pick(&bad)).unwrap_err().to_string();
+            let first = CUBE_FACES[bad[0].min(bad[1])];
+            assert!(e.contains(&format!("cube/{first}.png")), "{e}");
+        }
+    }
 
     #[test]
     fn jpeg_end_marker() {
