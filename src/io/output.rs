@@ -221,6 +221,18 @@ enum Source {
     Id,
 }
 
+impl Source {
+    /// Bytes per sample in the file: 2 for floats written as `half`, else 4 (`id` is always
+    /// a u32).
+    fn bytes(self, half: bool) -> usize {
+        if half && !matches!(self, Source::Id) {
+            2
+        } else {
+            4
+        }
+    }
+}
+
 /// The file's channels, in its (byte-wise sorted) order: name and source.
 fn channel_layout(aovs: &[Aov]) -> Vec<(&'static str, Source)> {
     use crate::io::aov::CHANNELS;
@@ -275,16 +287,7 @@ fn encode_block(
     layout: &[(&str, Source)],
     half: bool,
 ) -> Vec<u8> {
-    let size: usize = layout
-        .iter()
-        .map(|(_, s)| {
-            if half && !matches!(s, Source::Id) {
-                2
-            } else {
-                4
-            }
-        })
-        .sum();
+    let size: usize = layout.iter().map(|(_, s)| s.bytes(half)).sum();
     let mut out = vec![0u8; (r1 - r0) * width * size];
     let mut at = 0;
     // the next `width` samples of a channel, `bytes` each
@@ -296,11 +299,7 @@ fn encode_block(
         let span = r * width..(r + 1) * width;
         for &(_, source) in layout {
             let a = rows.aovs;
-            let bytes = if half && !matches!(source, Source::Id) {
-                2
-            } else {
-                4
-            };
+            let bytes = source.bytes(half);
             let dst = &mut out[take(bytes)];
             match source {
                 Source::Beauty(c) => put(dst, rows.beauty[span.clone()].iter().map(|p| p[c]), half),
@@ -428,16 +427,7 @@ fn write_exr<W: Write + Seek + Send>(
     let (pw, ph) = (part.width() as usize, part.height() as usize);
     let compression = opts.compression;
     // 16-bit words per sample of each channel, in the file's order (PIZ's blocks)
-    let words: Vec<usize> = layout
-        .iter()
-        .map(|(_, s)| {
-            if opts.half && !matches!(s, Source::Id) {
-                1
-            } else {
-                2
-            }
-        })
-        .collect();
+    let words: Vec<usize> = layout.iter().map(|(_, s)| s.bytes(opts.half) / 2).collect();
     let mut header = Header::new("rgb".into(), (pw, ph), channels)
         .with_encoding(
             compression.to_exr(),
