@@ -30,6 +30,18 @@ pub(super) struct Tables {
     shorts: Vec<u32>,
     /// The symbols that occur, relative to the first.
     present: Vec<u32>,
+    /// The code-length construction's buffers.
+    sort: Sorted,
+}
+
+/// The symbols that occur sorted by frequency, and the weights that become their code
+/// lengths ([`code_lengths_of`]'s buffers, kept from block to block).
+#[derive(Default)]
+struct Sorted {
+    order: Vec<u32>,
+    weight: Vec<u32>,
+    /// Symbols of frequency [`SMALL`] and more, sorted by comparison.
+    large: Vec<(u32, u32)>,
 }
 
 impl Tables {
@@ -41,6 +53,7 @@ impl Tables {
             codes: vec![0; SYMBOLS],
             shorts: vec![0; SYMBOLS],
             present: Vec::new(),
+            sort: Sorted::default(),
         }
     }
 }
@@ -117,6 +130,7 @@ pub(super) fn huffman(data: &[u16], out: &mut Vec<u8>, tables: &mut Tables) {
         codes,
         shorts,
         present,
+        sort,
     } = tables;
     if data.is_empty() {
         return;
@@ -143,7 +157,7 @@ pub(super) fn huffman(data: &[u16], out: &mut Vec<u8>, tables: &mut Tables) {
     freq[rle] = 1;
     // the symbols that occur, relative to `lo`, and their codes
     present_symbols(&freq[lo..=rle], present);
-    code_lengths_of(&freq[lo..=rle], present, &mut lengths[lo..=rle]);
+    code_lengths_of(&freq[lo..=rle], present, &mut lengths[lo..=rle], sort);
     canonical(present, &lengths[lo..=rle], &mut codes[lo..=rle]);
 
     let header = out.len();
@@ -265,7 +279,9 @@ pub(super) fn emit<C: Packed, const PER: usize>(
 pub(super) fn code_lengths(freq: &[u32], lengths: &mut [u32]) {
     let mut present = Vec::new();
     present_symbols(freq, &mut present);
-    code_lengths_of(freq, &present, lengths);
+    lengths.fill(0);
+    code_lengths_of(freq, &present, lengths, &mut Sorted::default());
+    debug_assert!(lengths.iter().all(|&l| l <= MAX_CODE_BITS));
 }
 
 /// The symbols of nonzero frequency in `freq`, in order, into `present` (gathered without a
@@ -281,12 +297,17 @@ fn present_symbols(freq: &[u32], present: &mut Vec<u32>) {
     present.truncate(k);
 }
 
-/// [`code_lengths`] given the symbols that occur (`present`, in order).
-fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32]) {
+/// [`code_lengths`] given the symbols that occur (`present`, in order): their lengths are
+/// written, the other entries of `lengths` left as they are.
+fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32], sort: &mut Sorted) {
     // counting sort of them by frequency, frequencies below `SMALL` by bucket
-    const SMALL: usize = 1024;
-    let mut count = vec![0u32; SMALL + 1];
-    let mut large: Vec<(u32, u32)> = Vec::new();
+    let mut count = [0u32; SMALL + 1];
+    let Sorted {
+        order,
+        weight,
+        large,
+    } = sort;
+    large.clear();
     for &s in present {
         let f = freq[s as usize];
         if f as usize >= SMALL {
@@ -303,8 +324,8 @@ fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32]) {
         start += n;
     }
     let n = present.len();
-    let mut order = vec![0u32; n];
-    let mut weight = vec![0u32; n];
+    order.resize(n, 0);
+    weight.resize(n, 0);
     for &s in present {
         let f = freq[s as usize];
         if (f as usize) < SMALL {
@@ -318,13 +339,14 @@ fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32]) {
         order[start as usize + k] = s;
         weight[start as usize + k] = f;
     }
-    minimum_redundancy(&mut weight);
-    lengths.fill(0);
-    for (&s, &l) in order.iter().zip(&weight) {
+    minimum_redundancy(&mut weight[..n]);
+    for (&s, &l) in order[..n].iter().zip(&weight[..n]) {
         lengths[s as usize] = l;
     }
-    debug_assert!(lengths.iter().all(|&l| l <= MAX_CODE_BITS));
 }
+
+/// Frequencies below this are sorted by counting, the rest by comparison.
+const SMALL: usize = 1024;
 
 /// Moffat and Katajainen's in-place minimum-redundancy code ("In-place calculation of
 /// minimum-redundancy codes", 1995): `a` holds weights in increasing order and is left
