@@ -580,18 +580,24 @@ fn write_exr<W: Write + Seek + Send>(
                     if let Some(msg) = write_error(&state) {
                         return Err(Error::image(path, msg));
                     }
-                    let n = if pending.is_empty() {
+                    let mut rows = rows;
+                    if !pending.is_empty() {
+                        // the waiting rows (less than a block) completed from the front of
+                        // the batch and emitted on their own: only that block is copied
+                        let take = (lines * pw - pending.len()).min(rows.len());
+                        pending.extend_from_slice(&rows[..take]);
+                        rows = &rows[take..];
+                        if pending.len() == lines * pw {
+                            done += emit(&pending, done, false);
+                            pending.clear();
+                        }
+                    }
+                    if pending.is_empty() {
                         // straight from the caller's rows; the rest of a block waits
                         let n = emit(rows, done, false);
                         pending.extend_from_slice(&rows[n * pw..]);
-                        n
-                    } else {
-                        pending.extend_from_slice(rows);
-                        let n = emit(&pending, done, false);
-                        pending.drain(..n * pw);
-                        n
-                    };
-                    done += n;
+                        done += n;
+                    }
                     Ok(())
                 });
                 rendered = done + pending.len() / pw;

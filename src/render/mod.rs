@@ -290,7 +290,8 @@ pub fn render_rows(
             (batch_ty * TILE).max(part.y0),
             (batch_ty1 * TILE).min(part.y1),
         );
-        rows.clear();
+        // every pixel is written below: a batch reuses the last one's buffer as it is (only
+        // growth is zeroed), where clearing it cost a serial memset of the whole batch
         rows.resize((ry1 - ry0) as usize * pw, Vec3::ZERO);
         let per_band = (tx1 - tx0) as usize;
         let mut bands = Vec::with_capacity((batch_ty1 - batch_ty) as usize);
