@@ -121,8 +121,14 @@ pub fn render_tile(
     generate_camera_rays(&camera, offsets, (x0, y0, x1, y1), depth, rays);
     counts[0] += rays.len() as u64;
     let mut generation = 0;
+    // each phase's end is the next one's start: one clock read per phase
+    let mut start = Instant::now();
+    let mut lap = |phase: &mut u64| {
+        let now = Instant::now();
+        *phase += (now - start).as_nanos() as u64;
+        start = now;
+    };
     while !rays.is_empty() {
-        let start = Instant::now();
         let kernel = match generation {
             0 => kernels.camera,
             1 => kernels.secondary,
@@ -130,9 +136,8 @@ pub fn render_tile(
         };
         intersect_closest(world, kernel, rays, (hits, insts), unique);
         counts[4] += rays.twins.count() as u64;
-        phase_ns[if generation == 0 { 0 } else { 3 }] += start.elapsed().as_nanos() as u64;
+        lap(&mut phase_ns[if generation == 0 { 0 } else { 3 }]);
 
-        let start = Instant::now();
         handle_escaped_rays(world, rays, hits, accum);
         let over = shade_hits(
             world,
@@ -146,14 +151,13 @@ pub fn render_tile(
             shade,
             (tree, budget),
         );
-        phase_ns[1] += start.elapsed().as_nanos() as u64;
+        lap(&mut phase_ns[1]);
         if let Some(pixel) = over {
             let tw = x1 - x0;
             stats.set_over_budget(x0 + pixel % tw, y0 + pixel / tw, camera.width);
             break; // the render has failed; the tile's pixels will not be used
         }
 
-        let start = Instant::now();
         counts[1] += shadows.len() as u64;
         counts[5] += shadows.twins.count() as u64;
         let kernel = if generation == 0 {
@@ -163,10 +167,9 @@ pub fn render_tile(
         };
         trace_shadow_rays(world, kernel, shadows, accum, (unique, occluded));
         shadows.clear();
-        phase_ns[2] += start.elapsed().as_nanos() as u64;
+        lap(&mut phase_ns[2]);
 
         // the repacking of the next generation counts as secondary-ray time
-        let start = Instant::now();
         std::mem::swap(rays, next);
         next.clear();
         // `rays` now holds what this generation's hits spawned; the secondaries of camera-ray
@@ -174,7 +177,7 @@ pub fn render_tile(
         if BIN_SECONDARY && generation >= 1 {
             rays.bin_by_direction_and_origin(binning);
         }
-        phase_ns[3] += start.elapsed().as_nanos() as u64;
+        lap(&mut phase_ns[3]);
         generation += 1;
     }
 
