@@ -59,8 +59,28 @@ pub fn parse_m_detail(bytes: &[u8], path: &Path) -> Result<(Mesh, Vec<String>, b
 
 /// Parse `.m` text into an [`MRead`]; `path` is only used in messages.
 pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
+    // a few pieces a thread, so that the vertex lines (the slow ones, usually first) spread;
+    // one thread parses the file as one piece
+    let piece = match rayon::current_num_threads() {
+        1 => usize::MAX,
+        n => PIECE_BYTES.max(bytes.len() / (4 * n)),
+    };
+    read_m_in(bytes, path, piece)
+}
+
+/// The fewest bytes of text one task parses: a larger file is cut at line ends into pieces,
+/// parsed on rayon's pool and merged in order (the same mesh, warnings and first error as
+/// one pass over the file).
+const PIECE_BYTES: usize = 1 << 18;
+
+/// [`read_m`] with the file cut into pieces of about `piece` bytes.
+fn read_m_in(bytes: &[u8], path: &Path, piece: usize) -> Result<MRead> {
+    use rayon::prelude::*;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let err = |line: usize, msg: String| Error::parse(path, line, msg);
+
+    let pieces = cut_at_lines(bytes, piece);
+    let parsed: Vec<Records> = pieces.par_iter().map(|p| Records::parse(p)).collect();
 
     let mut ids = IdMap::new(bytes.len());
     let mut positions = Vec::new();
@@ -75,67 +95,44 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
     let mut duplicate_face: Option<(usize, u64, usize)> = None;
     let mut more_duplicates = 0usize;
 
-    for (line_no, line) in lines(bytes) {
-        let text = line.map_err(|m| err(line_no, m.into()))?;
-        let (head, body) = split_braces(text).map_err(|m| err(line_no, m))?;
-        let mut tokens = head.split_ascii_whitespace();
-        match tokens.next() {
-            Some("Vertex") => {
-                let id = parse_id(tokens.next(), "vertex id").map_err(|m| err(line_no, m))?;
-                let mut xyz = [0f32; 3];
-                for (k, c) in xyz.iter_mut().enumerate() {
-                    let tok = tokens.next().ok_or_else(|| {
-                        err(
-                            line_no,
-                            format!("Vertex {id}: missing {} coordinate", ["x", "y", "z"][k]),
-                        )
-                    })?;
-                    *c = parse_f32(tok).map_err(|m| err(line_no, format!("Vertex {id}: {m}")))?;
-                }
-                if let Some(extra) = tokens.next() {
-                    return Err(err(
-                        line_no,
-                        format!("Vertex {id}: unexpected extra value '{extra}'"),
-                    ));
-                }
-                let a = parse_attrs(body.unwrap_or(""))
-                    .map_err(|m| err(line_no, format!("Vertex {id}: {m}")))?;
-                if ids.insert_new(id, positions.len() as u32).is_some() {
-                    return Err(err(line_no, format!("duplicate vertex id {id}")));
-                }
-                positions.push(Vec3::from(xyz));
-                attrs.push((a, line_no));
+    // the lines before the piece
+    let mut before = 0;
+    for mut r in parsed {
+        // a duplicate vertex id comes before the piece's own error, which ends its records
+        for (j, &id) in r.vertex_ids.iter().enumerate() {
+            if ids.insert_new(id, (positions.len() + j) as u32).is_some() {
+                let line = before + r.attrs[j].1;
+                return Err(err(line, format!("duplicate vertex id {id}")));
             }
-            Some("Face") => {
-                let id = parse_id(tokens.next(), "face id").map_err(|m| err(line_no, m))?;
-                let start = face_verts.len();
-                for t in tokens {
-                    let v = parse_id(Some(t), "vertex id")
-                        .map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
-                    face_verts.push(v);
-                }
-                let count = face_verts.len() - start;
-                if count < 3 {
-                    return Err(err(
-                        line_no,
-                        format!("Face {id}: needs at least 3 vertices, has {count}"),
-                    ));
-                }
-                if let Some(b) = body {
-                    parse_attrs(b).map_err(|m| err(line_no, format!("Face {id}: {m}")))?;
-                }
-                if let Some(first) = face_ids.insert_new(id, faces.len() as u32) {
-                    let first = faces[first as usize].0;
-                    match duplicate_face {
-                        None => duplicate_face = Some((line_no, id, first)),
-                        Some(_) => more_duplicates += 1,
-                    }
-                }
-                faces.push((line_no, start..face_verts.len()));
-            }
-            // Edge, Corner and any other record type: not needed for rendering.
-            _ => {}
         }
+        let (shift, base) = (face_verts.len(), faces.len());
+        for k in 0..r.faces.len() {
+            let (line, verts) = &mut r.faces[k];
+            *line += before;
+            *verts = verts.start + shift..verts.end + shift;
+            let (id, line) = (r.face_ids[k], *line);
+            if let Some(first) = face_ids.insert_new(id, (base + k) as u32) {
+                let first = match first as usize {
+                    f if f < base => faces[f].0,
+                    f => r.faces[f - base].0,
+                };
+                match duplicate_face {
+                    None => duplicate_face = Some((line, id, first)),
+                    Some(_) => more_duplicates += 1,
+                }
+            }
+        }
+        if let Some((line, msg)) = r.error {
+            return Err(err(before + line, msg));
+        }
+        for a in &mut r.attrs {
+            a.1 += before;
+        }
+        take_or_extend(&mut positions, r.positions);
+        take_or_extend(&mut attrs, r.attrs);
+        take_or_extend(&mut faces, r.faces);
+        take_or_extend(&mut face_verts, r.face_verts);
+        before += r.newlines;
     }
 
     if faces.is_empty() {
@@ -223,6 +220,116 @@ pub fn read_m(bytes: &[u8], path: &Path) -> Result<MRead> {
         file_normals,
         missing_rgb,
     })
+}
+
+/// `bytes` cut after a newline every `size` bytes or so (one piece when it is no longer).
+fn cut_at_lines(bytes: &[u8], size: usize) -> Vec<&[u8]> {
+    let mut pieces = Vec::new();
+    let mut rest = bytes;
+    while rest.len() > size {
+        let Some(k) = memchr::memchr(b'\n', &rest[size..]) else {
+            break;
+        };
+        let (piece, tail) = rest.split_at(size + k + 1);
+        pieces.push(piece);
+        rest = tail;
+    }
+    pieces.push(rest);
+    pieces
+}
+
+/// The records of a piece of a `.m` file, lines numbered from 1 at the piece's start.
+#[derive(Default)]
+struct Records {
+    /// Newlines in the piece: the lines of the pieces after it start this much later.
+    newlines: usize,
+    /// Each vertex's id, position, and attributes with its line.
+    vertex_ids: Vec<u64>,
+    positions: Vec<Vec3>,
+    attrs: Vec<(VertexAttrs, usize)>,
+    /// Each face's id, and its line with its run of `face_verts`.
+    face_ids: Vec<u64>,
+    faces: Vec<(usize, std::ops::Range<usize>)>,
+    face_verts: Vec<u64>,
+    /// The first line that does not parse, and why: the records stop before it.
+    error: Option<(usize, String)>,
+}
+
+/// `items` appended to `to`, or taken as it is when `to` is empty (a file of one piece
+/// is not copied).
+fn take_or_extend<T>(to: &mut Vec<T>, items: Vec<T>) {
+    if to.is_empty() {
+        *to = items;
+    } else {
+        to.extend(items);
+    }
+}
+
+impl Records {
+    fn parse(piece: &[u8]) -> Records {
+        let mut r = Records {
+            newlines: memchr::memchr_iter(b'\n', piece).count(),
+            ..Records::default()
+        };
+        for (line_no, line) in lines(piece) {
+            if let Err(msg) = r.record(line_no, line) {
+                r.error = Some((line_no, msg));
+                break;
+            }
+        }
+        r
+    }
+
+    /// Record line `line_no` (its text, or why it is not text).
+    fn record(
+        &mut self,
+        line_no: usize,
+        line: std::result::Result<&str, &'static str>,
+    ) -> std::result::Result<(), String> {
+        let text = line?;
+        let (head, body) = split_braces(text)?;
+        let mut tokens = head.split_ascii_whitespace();
+        match tokens.next() {
+            Some("Vertex") => {
+                let id = parse_id(tokens.next(), "vertex id")?;
+                let mut xyz = [0f32; 3];
+                for (k, c) in xyz.iter_mut().enumerate() {
+                    let tok = tokens.next().ok_or_else(|| {
+                        format!("Vertex {id}: missing {} coordinate", ["x", "y", "z"][k])
+                    })?;
+                    *c = parse_f32(tok).map_err(|m| format!("Vertex {id}: {m}"))?;
+                }
+                if let Some(extra) = tokens.next() {
+                    return Err(format!("Vertex {id}: unexpected extra value '{extra}'"));
+                }
+                let a = parse_attrs(body.unwrap_or("")).map_err(|m| format!("Vertex {id}: {m}"))?;
+                self.vertex_ids.push(id);
+                self.positions.push(Vec3::from(xyz));
+                self.attrs.push((a, line_no));
+            }
+            Some("Face") => {
+                let id = parse_id(tokens.next(), "face id")?;
+                let start = self.face_verts.len();
+                for t in tokens {
+                    let v =
+                        parse_id(Some(t), "vertex id").map_err(|m| format!("Face {id}: {m}"))?;
+                    self.face_verts.push(v);
+                }
+                let count = self.face_verts.len() - start;
+                if count < 3 {
+                    return Err(format!("Face {id}: needs at least 3 vertices, has {count}"));
+                }
+                if let Some(b) = body {
+                    parse_attrs(b).map_err(|m| format!("Face {id}: {m}"))?;
+                }
+                self.face_ids.push(id);
+                self.faces.push((line_no, start..self.face_verts.len()));
+            }
+            // Edge, Corner and any other record type: not needed for rendering.
+            _ => {}
+        }
+        Ok(())
+    }
 }
 
 /// The lines of a `.m` file that hold a record (not blank, not a comment), numbered from 1,
@@ -349,22 +456,42 @@ fn partial<T: Copy>(
     Some(attrs.iter().map(|(a, _)| get(a).unwrap_or(fill)).collect())
 }
 
-/// Split `head {body}` into its parts; the body must be the last thing on the line.
+/// Split `head {body}` into its parts; the body must be the last thing on the line. A `#`
+/// starts a comment unless it lies inside braces opened before it and not closed. (One
+/// pass finds the first `#`, `{` and `}`; `split_braces_reference` in the tests is the rule
+/// written out.)
 fn split_braces(text: &str) -> Result<(&str, Option<&str>), String> {
-    let text = match text.find('#') {
-        // A trailing comment after the record (outside any braces).
-        Some(h) if !text[..h].contains('{') || text[..h].contains('}') => &text[..h],
+    let b = text.as_bytes();
+    let (mut hash, mut open, mut close) = (None, None, None);
+    for at in memchr::memchr3_iter(b'#', b'{', b'}', b) {
+        let first = match b[at] {
+            b'#' => &mut hash,
+            b'{' => &mut open,
+            _ => &mut close,
+        };
+        first.get_or_insert(at);
+        if hash.is_some() && open.is_some() && close.is_some() {
+            break;
+        }
+    }
+    let text = match hash {
+        // a trailing comment after the record (outside any braces)
+        Some(h) if open.is_none_or(|o| o > h) || close.is_some_and(|c| c < h) => &text[..h],
         _ => text,
     };
-    match text.find('{') {
-        None if text.contains('}') => Err("unbalanced braces: '}' without '{'".into()),
+    let (open, close) = (
+        open.filter(|&o| o < text.len()),
+        close.filter(|&c| c < text.len()),
+    );
+    match open {
+        None if close.is_some() => Err("unbalanced braces: '}' without '{'".into()),
         None => Ok((text, None)),
         Some(open) => {
             let rest = text[open + 1..].trim_end();
             let body = rest.strip_suffix('}').ok_or_else(|| {
                 "unbalanced braces: '{' without closing '}' at the end of the line".to_string()
             })?;
-            if body.contains('{') || body.contains('}') {
+            if memchr::memchr2(b'{', b'}', body.as_bytes()).is_some() {
                 return Err("unbalanced or nested braces".into());
             }
             Ok((&text[..open], Some(body)))

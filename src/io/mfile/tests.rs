@@ -213,3 +213,95 @@ fn degenerate_faces_warn() {
     assert_eq!(m.degenerate_count(), 1);
     assert!(w[0].contains("1 degenerate"));
 }
+
+/// A file cut into pieces parsed on their own and merged gives what one pass gives: the same
+/// mesh and warnings, or the same first error (its line and message), whatever the cuts.
+#[test]
+fn pieces_parse_as_the_whole_file() {
+    let show = |r: Result<MRead>| match r {
+        Ok(r) => format!(
+            "{:?} {:?} {} {:?}",
+            r.mesh, r.warnings, r.file_normals, r.missing_rgb
+        ),
+        Err(e) => e.to_string(),
+    };
+    let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/meshes/fandisk.m"))
+        .expect("meshes/fandisk.m");
+    let good = [
+        QUAD,
+        &QUAD.replace("Face 2 1 5 7", "Face 1 1 5 7\nFace 1 2 5 7\nFace 2 1 5 7"),
+        "\u{feff}#      VERTICES\r\nVertex   10   1.0E+00  0.0e0 -0.0\r\nVertex 3 0 1E0 0 {normal=(0 0 1)}\r\n\
+         Face 1 10 3 99 4\r\nVertex 99 -1 0 0\r\nVertex 4 0 -1 0 # trailing\r\nEdge 1 2 {sharp}",
+        "Vertex 1 0 0 0 {uv=(0.5 0.5) rgb=(1 0 0)}\nVertex 2 1 0 0 {rgb=(0 1 0)}\n\n\n\
+         Vertex 3 0 1 0\nVertex 4 1 1 0 {uv=(1 1)}\nFace 1 1 2 3\nFace 2 2 4 3\n",
+    ];
+    let bad = [
+        // a duplicate vertex before a later line's error, and after an earlier one
+        "Vertex 1 0 0 0\nVertex 2 0 0 0\nVertex 1 1 0 0\nFace 1 1 2\nVertex 3 0 nan 0\n",
+        "Vertex 1 0 0 0\nVertex 2 0 0 0\nVertex 3 0 nan 0\nFace 1 1 2 3\nVertex 1 1 0 0\n",
+        "Vertex 1 0 0 0\nVertex 2 1 0 0\nVertex 3 0 1 0\nFace 1 1 2 4\n#\n\n",
+        "Vertex 1 0 0 0 {uv=(1 2)\nVertex 2 0 0 0\n",
+        "Vertex 1 0 0 0\n# \u{e9}\nVertex 2 \u{0} 0 0\n",
+        "Vertex 1 0 0 0\nVertex 2 1 0 0\n",
+    ];
+    for text in good.iter().chain(&bad) {
+        let whole = show(read_m_in(text.as_bytes(), Path::new("t.m"), usize::MAX));
+        for piece in [1, 2, 7, 30, 64] {
+            let cut = show(read_m_in(text.as_bytes(), Path::new("t.m"), piece));
+            assert_eq!(cut, whole, "{text:?} in pieces of {piece}");
+        }
+    }
+    for text in &bad {
+        assert!(read_m_in(text.as_bytes(), Path::new("t.m"), 1).is_err());
+    }
+    let whole = read_m_in(&bytes, Path::new("f.m"), usize::MAX);
+    assert!(whole.is_ok(), "fandisk.m reads");
+    let whole = show(whole);
+    for piece in [1000, 65536] {
+        assert_eq!(show(read_m_in(&bytes, Path::new("f.m"), piece)), whole);
+    }
+}
+
+/// The brace and comment rule of a record line, written out one search at a time.
+fn split_braces_reference(text: &str) -> std::result::Result<(&str, Option<&str>), String> {
+    let text = match text.find('#') {
+        Some(h) if !text[..h].contains('{') || text[..h].contains('}') => &text[..h],
+        _ => text,
+    };
+    match text.find('{') {
+        None if text.contains('}') => Err("unbalanced braces: '}' without '{'".into()),
+        None => Ok((text, None)),
+        Some(open) => {
+            let rest = text[open + 1..].trim_end();
+            let body = rest.strip_suffix('}').ok_or_else(|| {
+                "unbalanced braces: '{' without closing '}' at the end of the line".to_string()
+            })?;
+            if body.contains('{') || body.contains('}') {
+                return Err("unbalanced or nested braces".into());
+            }
+            Ok((&text[..open], Some(body)))
+        }
+    }
+}
+
+#[test]
+fn braces_split_as_the_rule_says() {
+    use proptest::prelude::*;
+    let line = proptest::collection::vec(
+        prop_oneof![
+            Just('#'),
+            Just('{'),
+            Just('}'),
+            Just(' '),
+            Just('\t'),
+            Just('a'),
+            Just('\u{a0}'),
+            Just('\u{e9}')
+        ],
+        0..16,
+    );
+    proptest!(ProptestConfig::with_cases(20_000), |(chars in line)| {
+        let text: String = chars.into_iter().collect();
+        prop_assert_eq!(split_braces(&text), split_braces_reference(&text), "{:?}", text);
+    });
+}
