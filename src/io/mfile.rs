@@ -95,6 +95,13 @@ fn read_m_in(bytes: &[u8], path: &Path, piece: usize) -> Result<MRead> {
     let mut duplicate_face: Option<(usize, u64, usize)> = None;
     let mut more_duplicates = 0usize;
 
+    // the merged vectors sized once (a piece's vectors are freed as it is merged)
+    let total = |n: fn(&Records) -> usize| parsed.iter().map(n).sum::<usize>();
+    let sizes = (
+        total(|r| r.positions.len()),
+        total(|r| r.faces.len()),
+        total(|r| r.face_verts.len()),
+    );
     // the lines before the piece
     let mut before = 0;
     for mut r in parsed {
@@ -128,10 +135,10 @@ fn read_m_in(bytes: &[u8], path: &Path, piece: usize) -> Result<MRead> {
         for a in &mut r.attrs {
             a.1 += before;
         }
-        take_or_extend(&mut positions, r.positions);
-        take_or_extend(&mut attrs, r.attrs);
-        take_or_extend(&mut faces, r.faces);
-        take_or_extend(&mut face_verts, r.face_verts);
+        take_or_extend(&mut positions, r.positions, sizes.0);
+        take_or_extend(&mut attrs, r.attrs, sizes.0);
+        take_or_extend(&mut faces, r.faces, sizes.1);
+        take_or_extend(&mut face_verts, r.face_verts, sizes.2);
         before += r.newlines;
     }
 
@@ -256,13 +263,14 @@ struct Records {
 }
 
 /// `items` appended to `to`, or taken as it is when `to` is empty (a file of one piece
-/// is not copied).
-fn take_or_extend<T>(to: &mut Vec<T>, items: Vec<T>) {
+/// is not copied), with room for `total` items in all.
+fn take_or_extend<T>(to: &mut Vec<T>, items: Vec<T>, total: usize) {
     if to.is_empty() {
         *to = items;
     } else {
         to.extend(items);
     }
+    to.reserve_exact(total.saturating_sub(to.len()));
 }
 
 impl Records {
