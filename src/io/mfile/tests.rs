@@ -305,3 +305,35 @@ fn braces_split_as_the_rule_says() {
         prop_assert_eq!(split_braces(&text), split_braces_reference(&text), "{:?}", text);
     });
 }
+
+/// Random files of good and bad lines parse the same in pieces as in one pass.
+#[test]
+fn random_files_parse_the_same_in_pieces() {
+    use proptest::prelude::*;
+    let line = prop_oneof![
+        (1u64..6, -2i32..3, -2i32..3).prop_map(|(id, x, y)| format!("Vertex {id} {x} {y} 0")),
+        (1u64..6, 0u8..3).prop_map(|(id, k)| format!(
+            "Vertex {id} 1 2 3 {{{}}}",
+            ["uv=(0.5 0.5)", "rgb=(1 0 0) normal=(0 0 1)", "uv=(1 2"][k as usize]
+        )),
+        (1u64..4, 1u64..7, 1u64..7, 1u64..7)
+            .prop_map(|(f, a, b, c)| format!("Face {f} {a} {b} {c}")),
+        Just("# comment {".to_string()),
+        Just(String::new()),
+        Just("Edge 1 2 {sharp}".to_string()),
+        Just("Vertex 9 nan 0 0".to_string()),
+        Just("Face 8 1 2".to_string()),
+        Just("Vertex 7 0 0 0 } {".to_string()),
+    ];
+    let file = proptest::collection::vec(line, 0..24);
+    proptest!(ProptestConfig::with_cases(2_000), |(lines in file, piece in 1usize..80, crlf: bool)| {
+        let text = lines.join(if crlf { "\r\n" } else { "\n" });
+        let show = |r: Result<MRead>| match r {
+            Ok(r) => format!("{:?} {:?} {} {:?}", r.mesh, r.warnings, r.file_normals, r.missing_rgb),
+            Err(e) => e.to_string(),
+        };
+        let whole = show(read_m_in(text.as_bytes(), Path::new("t.m"), usize::MAX));
+        let cut = show(read_m_in(text.as_bytes(), Path::new("t.m"), piece));
+        prop_assert_eq!(cut, whole, "{:?} in pieces of {}", text, piece);
+    });
+}
