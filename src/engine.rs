@@ -15,12 +15,12 @@
 //!
 //! Where two engines are candidates, which is faster depends on the mesh as well (how soon
 //! a packet's lanes part), so a batch of at least [`PILOT_MIN`] rays settles it by a pilot
-//! ([`pilot`]): runs of 384 rays covering one ray in 512 (at least 8 runs), spread over the
-//! batch, each traced by both into the batch's output, the first 64 rays of a run untimed;
+//! ([`pilot`]): runs of 512 rays covering one ray in 512 (at least 8 runs), spread over the
+//! batch, each traced by both into the batch's output, the first 192 rays of a run untimed;
 //! the rest of the batch is then traced by the one with the smaller total ([`left_over`]: the
 //! pilot's results stand, as every engine's are `intersect1`'s; the pilot's cost is the
-//! second trace of its rays, 0.4% of a large batch, 1.5% of the bench's 201,702-ray sets,
-//! 2.3% at [`PILOT_MIN`]). Smaller batches (and the renderer's tile-sized queues) take the
+//! second trace of its rays, 0.2% of a large batch, 2.0% of the bench's 201,702-ray sets,
+//! 3.1% at [`PILOT_MIN`]). Smaller batches (and the renderer's tile-sized queues) take the
 //! first candidate.
 
 use crate::accel::Accel;
@@ -275,19 +275,26 @@ pub fn choose_by(s: Spread, avx512: bool) -> Engine {
 
 /// Rays of one pilot block.
 pub const PILOT_BLOCK: usize = 64;
-/// Blocks of one pilot run: the first warms the cache for the engine, the rest are timed.
-/// Runs of 3 blocks (128 rays timed) chose `hybrid8` for the 5.2M-triangle bench's
-/// compacted hits on an AMD Zen 3 without AVX-512, at 0.88 of `wide1`: a short run starts
-/// with colder caches than a ray amid the batch, which costs the single-ray walk more than
-/// the packets. With 6 `auto` was within 5% of the best engine on all five workloads at
+/// Blocks of one pilot run: the first [`PILOT_WARM`] warm the caches for the engine, the
+/// rest are timed. Runs of 3 blocks (128 rays timed) chose `hybrid8` for the 5.2M-triangle
+/// bench's compacted hits on an AMD Zen 3 without AVX-512, at 0.88 of `wide1`: a short run
+/// starts with colder caches than a ray amid the batch, which costs the single-ray walk more
+/// than the packets. With 6 `auto` was within 5% of the best engine on all five workloads at
 /// 20k, 1.3M and 5.2M triangles there (docs/performance.md).
-pub const PILOT_RUN: usize = 6;
+pub const PILOT_RUN: usize = 8;
+/// Blocks of a pilot run traced untimed first. With one (64 rays, in runs of 6 blocks) the
+/// pilot chose `packet16` for the 5.2M-triangle bench's camera rays on every run on an AMD
+/// Zen 5 with AVX-512, where `hybrid16` traced them 1.15x as fast: the cold start costs the
+/// binary tree's packets less than the wide tree's walks there. With three (runs of 8, the
+/// same 320 rays timed) it chose `hybrid16` in 7 runs of 7, and still `packet16` at 1.3M
+/// triangles and on the kitten, where that is the faster (docs/engines.md).
+pub const PILOT_WARM: usize = 3;
 /// A pilot's runs cover one ray in this many, and there are at least [`PILOT_RUNS_MIN`].
 pub const PILOT_SHARE: usize = 512;
 /// Runs a pilot makes at least.
 pub const PILOT_RUNS_MIN: usize = 8;
 /// Batches of fewer rays take the rule's first candidate: their pilot would trace more than
-/// 1/40 of them twice over.
+/// 1/32 of them twice over.
 pub const PILOT_MIN: usize = 131072;
 
 /// The runs of a pilot over `n` rays: ranges of [`PILOT_RUN`] blocks of [`PILOT_BLOCK`]
@@ -310,7 +317,7 @@ pub fn pilot_blocks(n: usize) -> Vec<std::ops::Range<usize>> {
 
 /// Time the two candidates on the pilot runs of a batch of `n` rays (`run(engine, rays)`
 /// traces those rays with `engine`): both trace every run, `a` first on even runs and `b`
-/// first on odd ones, each its first block untimed (a run's first rays fetch the nodes its
+/// first on odd ones, each its first [`PILOT_WARM`] blocks untimed (a run's first rays fetch the nodes its
 /// later rays reuse, as in the batch itself: timed alone, 128-ray blocks picked `packet16`
 /// for the 5.2M-triangle camera rays, where `hybrid16` traces the batch 1.1x as fast) and
 /// the rest timed. The one with the smaller total time wins. Totals, not a median of
@@ -325,7 +332,7 @@ pub fn pilot(
     mut run: impl FnMut(Engine, std::ops::Range<usize>),
 ) -> Engine {
     pilot_by(two, n, |e, r| {
-        let warm = r.start + PILOT_BLOCK;
+        let warm = r.start + PILOT_WARM * PILOT_BLOCK;
         run(e, r.start..warm);
         let start = std::time::Instant::now();
         run(e, warm..r.end);

@@ -423,9 +423,9 @@ fn pilot_runs_spread_over_the_batch() {
             b.iter()
                 .all(|r| r.len() == len && r.start % 64 == 0 && r.end <= n)
         );
-        // at most 1/40 of the rays, and 1/400 of a large batch's
+        // at most 1/32 of the rays, and 1/400 of a large batch's
         let rays: usize = b.iter().map(|r| r.len()).sum();
-        assert!(rays * 40 <= n, "{n}: {rays}");
+        assert!(rays * 32 <= n, "{n}: {rays}");
         if n >= 2_000_000 {
             assert!(rays * 400 <= n, "{n}: {rays}");
         }
@@ -525,14 +525,14 @@ fn pilot_takes_the_faster() {
         }
     });
     assert_eq!(got, Engine::Hybrid16);
-    // the timed pilot: each engine warms up on a run's first block, then the rest, once each
+    // the timed pilot: each engine warms up on a run's first blocks, then the rest, once each
     let mut calls: Vec<(Engine, std::ops::Range<usize>)> = vec![];
     engine::pilot([Engine::Packet16, Engine::Hybrid16], n, |e, r| {
         calls.push((e, r))
     });
     assert_eq!(calls.len(), 4 * runs.len());
     for r in &runs {
-        let warm = r.start..r.start + engine::PILOT_BLOCK;
+        let warm = r.start..r.start + engine::PILOT_WARM * engine::PILOT_BLOCK;
         let timed = warm.end..r.end;
         for e in [Engine::Packet16, Engine::Hybrid16] {
             let at = |x: &std::ops::Range<usize>| {
