@@ -9,7 +9,7 @@ pub use packet::{Shade8, shade8, shade8_in};
 
 use crate::ray::{Hit, Ray, offset_origin, reflect, refract};
 use crate::scene::{Albedo, Geometry, Material};
-use crate::world::{NOT_INSTANCED, Terms, World};
+use crate::world::{NOT_INSTANCED, Placed, Terms, World};
 use glam::Vec3;
 
 /// Everything shading needs at a hit point.
@@ -56,12 +56,13 @@ pub fn surface(world: &World, ray: &Ray, hit: &Hit) -> Surface {
 
 /// [`surface`] of a hit on instance `inst` ([`NOT_INSTANCED`]: on the flattened geometry).
 pub fn surface_in(world: &World, ray: &Ray, hit: &Hit, inst: u32) -> Surface {
-    let (g, _) = world.shading(inst);
+    let on = world.shading(inst);
+    let g = on.0;
     let [i0, i1, i2] = g.triangles[hit.tri as usize].map(|i| i as usize);
     let (b1, b2) = (hit.b1, hit.b2);
     let b0 = 1.0 - b1 - b2;
     let q = ray.origin + hit.t * ray.dir;
-    let ([n0, n1, n2], ng) = normals(world, inst, hit.tri);
+    let ([n0, n1, n2], ng) = normals(on, hit.tri);
     let mut ng = ng;
     // shading normal: interpolated and normalised; the geometric normal if that vanishes.
     let mut n = (b0 * n0 + b1 * n1 + b2 * n2).try_normalize().unwrap_or(ng);
@@ -71,7 +72,7 @@ pub fn surface_in(world: &World, ray: &Ray, hit: &Hit, inst: u32) -> Surface {
         ng = -ng;
         n = -n;
     }
-    let material = triangle_material(world, hit.tri, inst);
+    let material = triangle_material(on, hit.tri);
     let m = &world.scene.materials[material as usize];
     Surface {
         q,
@@ -83,25 +84,24 @@ pub fn surface_in(world: &World, ray: &Ray, hit: &Hit, inst: u32) -> Surface {
     }
 }
 
-/// Index of the material of triangle `tri` of instance `inst` (its placement's material,
-/// else the triangle's own).
+/// Index of the material of triangle `tri` of the geometry and placement `on` (from
+/// [`World::shading`]): the placement's material, else the triangle's own.
 #[inline]
-pub fn triangle_material(world: &World, tri: u32, inst: u32) -> u32 {
-    match world.shading(inst) {
+pub fn triangle_material(on: (&Geometry, Option<Placed>), tri: u32) -> u32 {
+    match on {
         (_, Some((_, Some(m)))) => m,
         (g, _) => g.tri_material[tri as usize],
     }
 }
 
-/// The vertex normals and the geometric normal of triangle `tri` of instance `inst`, in
-/// world space: through a placement, carried by the inverse transpose of its transform and
-/// normalised, as the flattened scene's would be ([`crate::mesh::Mesh::transformed`]). A
-/// mirroring placement keeps the front the front (as glTF's mirrored nodes, and as the
+/// The vertex normals and the geometric normal of triangle `tri` of the geometry and
+/// placement `on` (from [`World::shading`]), in world space: through a placement, carried
+/// by the inverse transpose of its transform and normalised, as the flattened scene's would
+/// be ([`crate::mesh::Mesh::transformed`]). A mirroring placement keeps the front the front (as glTF's mirrored nodes, and as the
 /// engines' back-face test in object space): the geometric normal is the object's carried
 /// over, not `cross(v1 - v0, v2 - v0)` of the placed corners, which turns round.
 #[inline]
-pub fn normals(world: &World, inst: u32, tri: u32) -> ([Vec3; 3], Vec3) {
-    let (g, placed) = world.shading(inst);
+pub fn normals((g, placed): (&Geometry, Option<Placed>), tri: u32) -> ([Vec3; 3], Vec3) {
     let v = g.triangles[tri as usize].map(|i| g.normals[i as usize]);
     let ng = g.face_normals[tri as usize];
     match placed {

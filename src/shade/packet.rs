@@ -88,17 +88,15 @@ fn gather(
     let mut out = Gathered::default();
     let active = || (0..LANES).filter(move |&i| bits >> i & 1 == 1);
     let mut material = [0u32; LANES];
-    for i in active() {
-        material[i] = triangle_material(world, tri[i], insts[i]);
-    }
-    let first = material[bits.trailing_zeros() as usize % LANES];
-    let uniform = active().all(|i| material[i] == first);
     let mut od = [[0.0; LANES]; 3];
     for i in active() {
         let t = tri[i];
-        let (g, _) = world.shading(insts[i]);
+        // the lane's geometry and placement, once for its material, normals and colour
+        let on = world.shading(insts[i]);
+        let g = on.0;
+        material[i] = triangle_material(on, t);
         let v = g.triangles[t as usize].map(|x| x as usize);
-        let (vn, ng) = normals(world, insts[i], t);
+        let (vn, ng) = normals(on, t);
         for (vk, n) in vn.iter().enumerate() {
             out.vn[vk][0][i] = n.x;
             out.vn[vk][1][i] = n.y;
@@ -112,7 +110,8 @@ fn gather(
         }
     }
     out.od = vec3x8(&od);
-    if uniform {
+    let first = material[bits.trailing_zeros() as usize % LANES];
+    if active().all(|i| material[i] == first) {
         // one material: its constants splatted (the inactive lanes zeroed by the mask, as
         // the per-lane loads leave them), not 20 scalar stores per lane
         let m = &world.scene.materials[first as usize];
