@@ -18,6 +18,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 mod piz;
+mod writeback;
+
+use writeback::EarlyWriteback;
 
 /// How EXR pixels are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -177,10 +180,11 @@ pub fn write_streamed_with(
 /// Run `write` on a new temporary file beside `path` (`.NAME.PID-K.tmp` in the same folder,
 /// so the rename cannot cross file systems), then rename it over `path`. On any error the
 /// temporary file is removed and `path` keeps what it held. A process killed mid-write leaves
-/// `path` untouched too, and its hidden temporary file behind.
-pub fn write_atomically(
+/// `path` untouched too, and its hidden temporary file behind. The kernel is asked to start
+/// writing the file out as it grows ([`EarlyWriteback`]), which keeps the rename short.
+pub(crate) fn write_atomically(
     path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
+    write: impl FnOnce(&mut BufWriter<EarlyWriteback>) -> Result<()>,
 ) -> Result<()> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let name = path
@@ -199,7 +203,7 @@ pub fn write_atomically(
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
     let file = File::create_new(&tmp).map_err(|e| Error::io(path, e))?;
-    let mut out = BufWriter::with_capacity(1 << 20, file);
+    let mut out = BufWriter::with_capacity(1 << 20, EarlyWriteback::new(file));
     let result = write(&mut out)
         .and_then(|()| out.flush().map_err(|e| Error::io(path, e)))
         .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
