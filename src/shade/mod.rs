@@ -100,26 +100,34 @@ pub fn triangle_material(on: (&Geometry, Option<Placed>), tri: u32) -> u32 {
 /// be ([`crate::mesh::Mesh::transformed`]). A mirroring placement keeps the front the front (as glTF's mirrored nodes, and as the
 /// engines' back-face test in object space): the geometric normal is the object's carried
 /// over, not `cross(v1 - v0, v2 - v0)` of the placed corners, which turns round.
-#[inline]
+///
+/// (The arrays are written out element by element rather than with `array::map`, whose
+/// temporaries `shade8`'s gather stored piecewise and then read back whole: a store-forwarding
+/// stall per lane.)
+#[inline(always)]
 pub fn normals((g, placed): (&Geometry, Option<Placed>), tri: u32) -> ([Vec3; 3], Vec3) {
-    let v = g.triangles[tri as usize].map(|i| g.normals[i as usize]);
+    let [a, b, c] = g.triangles[tri as usize];
+    let v = [
+        g.normals[a as usize],
+        g.normals[b as usize],
+        g.normals[c as usize],
+    ];
     let ng = g.face_normals[tri as usize];
     match placed {
         None => (v, ng),
         Some((p, _)) => {
             let m = p.to_object.matrix3.transpose();
-            (
-                v.map(|n| (m * n).normalize_or_zero()),
-                (m * ng).normalize_or_zero(),
-            )
+            let f = |n: Vec3| (m * n).normalize_or_zero();
+            ([f(v[0]), f(v[1]), f(v[2])], f(ng))
         }
     }
 }
 
 /// `Od` at barycentric weights `b0 b1 b2` of the triangle with vertices `v`: the material's
 /// colour, the interpolated vertex colour or the texture at the interpolated `uv`.
-/// Shared by `surface` and `shade8`.
-#[inline]
+/// Shared by `surface` and `shade8`. (Inlined: called, its result came back through memory
+/// and was read a float at a time, which stalled on the call's wider stores.)
+#[inline(always)]
 pub fn albedo(g: &Geometry, m: &Material, v: [usize; 3], b0: f32, b1: f32, b2: f32) -> Vec3 {
     let [i0, i1, i2] = v;
     match &m.albedo {

@@ -117,8 +117,10 @@ fn gather(
         let m = &world.scene.materials[first as usize];
         let on = simd::mask_from_bits(bits);
         let zero = Vec3x8::splat([0.0; 3]);
-        out.kc = [m.ka, m.kd, m.ks, m.kt, m.ke, m.kr]
-            .map(|c| Vec3x8::select(on, Vec3x8::splat(c.to_array()), zero));
+        // (each written out: `array::map` over the six stored them piecewise and read them
+        // back whole, a store-forwarding stall per packet)
+        let f = |c: glam::Vec3| Vec3x8::select(on, Vec3x8::splat(c.to_array()), zero);
+        out.kc = [f(m.ka), f(m.kd), f(m.ks), f(m.kt), f(m.ke), f(m.kr)];
         out.n = simd::select(on, simd::splat(m.n), simd::splat(0.0));
         out.ior = simd::select(on, simd::splat(m.ior), simd::splat(0.0));
         out.emits = if m.emits() { bits } else { 0 };
