@@ -12,8 +12,9 @@
 //! Also [`keep_freed_memory`], for the command line: freed memory kept for reuse rather
 //! than handed back to the kernel and faulted in again.
 //!
-//! One of the crate's three `unsafe` places (the others: `packet16`'s AVX-512 dispatch and
-//! `wide1::interleave`'s prefetch hint), kept to the system calls.
+//! One of the crate's four `unsafe` places (the others: `packet16`'s AVX-512 dispatch,
+//! `wide1::interleave`'s prefetch hint and `io::output::writeback`'s request), kept to the
+//! system calls.
 
 /// Arrays smaller than this stay on small pages (a huge page is 2 MiB).
 const MIN_BYTES: usize = 4 << 20;
