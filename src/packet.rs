@@ -161,7 +161,10 @@ impl HitPacket8 {
         })
     }
 
-    /// Set lane `i`'s hit (`None` = a miss).
+    /// Set lane `i`'s hit (`None` = a miss). By blends into the registers: writing the lane
+    /// into arrays of the lanes and loading them back whole stalled on the stores (the
+    /// renderer sets every lane of a queue with twin rays this way).
+    #[inline]
     pub fn set_lane(&mut self, i: usize, hit: Option<Hit>) {
         let h = hit.unwrap_or(Hit {
             tri: Hit::NONE_ID,
@@ -169,22 +172,12 @@ impl HitPacket8 {
             b1: 0.0,
             b2: 0.0,
         });
-        let mut tri = simd::u32_lanes(self.tri);
-        let (mut t, mut b1, mut b2) = (
-            simd::lanes(self.t),
-            simd::lanes(self.b1),
-            simd::lanes(self.b2),
-        );
-        tri[i] = h.tri;
-        t[i] = h.t;
-        b1[i] = h.b1;
-        b2[i] = h.b2;
-        *self = HitPacket8 {
-            tri: simd::u32_from_lanes(tri),
-            t: simd::from_lanes(t),
-            b1: simd::from_lanes(b1),
-            b2: simd::from_lanes(b2),
-        };
+        assert!(i < LANES, "lane {i} of a packet of {LANES}");
+        let m = simd::mask_from_bits(1 << i);
+        self.tri = simd::select_u32(m, U32x8::splat(h.tri), self.tri);
+        self.t = simd::select(m, simd::splat(h.t), self.t);
+        self.b1 = simd::select(m, simd::splat(h.b1), self.b1);
+        self.b2 = simd::select(m, simd::splat(h.b2), self.b2);
     }
 
     /// Lanes with a hit.
