@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import os
 import warnings as _warnings
-from typing import Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from . import _whitted
+from . import _whitted  # type: ignore[attr-defined]  # (the compiled module: no stub)
 
 __all__ = [
     "RaycastingScene",
@@ -34,7 +35,12 @@ if _slow:
 #: Marker for "no geometry" / "no primitive" in id arrays (``2**32 - 1``), as in Open3D.
 INVALID_ID: int = _whitted.INVALID_ID
 
-builtin_scenes = _whitted.builtin_scenes
+
+
+def builtin_scenes() -> List[str]:
+    """The names of the built-in scenes (``"demo"``, ``"phong"``, ...)."""
+    return list(_whitted.builtin_scenes())
+
 
 
 def load_mesh(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
@@ -44,7 +50,7 @@ def load_mesh(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
     return v.reshape(-1, 3), t.reshape(-1, 3)
 
 
-def build_info() -> dict:
+def build_info() -> Dict[str, Any]:
     """What this build was compiled with and what the CPU has.
 
     Keys: ``version``; ``simd_compiled`` and ``simd_cpu`` (``"x86-64-v3"`` is AVX2 + FMA,
@@ -113,13 +119,13 @@ class RaycastingScene:
 
     INVALID_ID: int = _whitted.INVALID_ID
 
-    def __init__(self, nthreads: int = 0):
+    def __init__(self, nthreads: int = 0) -> None:
         _threads(nthreads)
         self._r = _whitted.Raycaster()
         #: The loaders' warnings from ``add_mesh``, in order.
         self.warnings: list = []
 
-    def add_triangles(self, vertices, triangles=None) -> int:
+    def add_triangles(self, vertices: Any, triangles: Optional[ArrayLike] = None) -> int:
         """Add a mesh: ``vertices`` ``[N, 3]`` floats and ``triangles`` ``[M, 3]`` indices
         (counter-clockwise is the front). Returns the geometry id (0, 1, ...). An Open3D
         ``TriangleMesh`` or a trimesh ``Trimesh`` is accepted in place of the two arrays."""
@@ -145,7 +151,7 @@ class RaycastingScene:
         return gid
 
     def cast_rays(
-        self, rays, nthreads: int = 0, engine: Optional[str] = None
+        self, rays: ArrayLike, nthreads: int = 0, engine: Optional[str] = None
     ) -> Dict[str, np.ndarray]:
         """Closest hits of ``rays`` ``[..., 6]``: a dict of ``t_hit`` ``[...]`` (float32,
         ``inf`` on a miss), ``geometry_ids`` and ``primitive_ids`` ``[...]`` (uint32,
@@ -164,7 +170,7 @@ class RaycastingScene:
         }
 
     def test_occlusions(
-        self, rays, tnear: float = 0.0, tfar: float = np.inf, nthreads: int = 0,
+        self, rays: ArrayLike, tnear: float = 0.0, tfar: float = np.inf, nthreads: int = 0,
         engine: Optional[str] = None,
     ) -> np.ndarray:
         """Whether each ray hits anything with ``tnear < t < tfar``: bool ``[...]``."""
@@ -173,12 +179,12 @@ class RaycastingScene:
             flat, float(tnear), float(tfar), _threads(nthreads), engine or ""
         ).reshape(lead)
 
-    def count_intersections(self, rays, nthreads: int = 0) -> np.ndarray:
+    def count_intersections(self, rays: ArrayLike, nthreads: int = 0) -> np.ndarray:
         """How many triangles each ray crosses at ``t > 0``: int32 ``[...]``."""
         flat, lead = _floats(rays, "rays", 6)
         return self._r.count_intersections(flat, _threads(nthreads)).reshape(lead)
 
-    def list_intersections(self, rays, nthreads: int = 0) -> Dict[str, np.ndarray]:
+    def list_intersections(self, rays: ArrayLike, nthreads: int = 0) -> Dict[str, np.ndarray]:
         """Every hit at ``t > 0``, sorted by ``t`` within each ray (rays in flattened
         order): ``ray_splits`` (uint32, ``[R + 1]``: ray ``i``'s hits are
         ``ray_splits[i]:ray_splits[i+1]``), ``ray_ids``, ``t_hit``, ``geometry_ids``,
@@ -194,7 +200,9 @@ class RaycastingScene:
             "primitive_uvs": uv.reshape(-1, 2),
         }
 
-    def compute_closest_points(self, query_points, nthreads: int = 0) -> Dict[str, np.ndarray]:
+    def compute_closest_points(
+        self, query_points: ArrayLike, nthreads: int = 0
+    ) -> Dict[str, np.ndarray]:
         """The nearest surface point to each of ``query_points`` ``[..., 3]``: ``points``
         ``[..., 3]``, ``geometry_ids``, ``primitive_ids`` ``[...]``, ``primitive_uvs``
         ``[..., 2]`` and ``primitive_normals`` ``[..., 3]`` (NaN and ``INVALID_ID`` for a NaN
@@ -209,7 +217,7 @@ class RaycastingScene:
             "primitive_normals": n.reshape(lead + (3,)),
         }
 
-    def compute_distance(self, query_points, nthreads: int = 0) -> np.ndarray:
+    def compute_distance(self, query_points: ArrayLike, nthreads: int = 0) -> np.ndarray:
         """Distance from each point to the surface: float32 ``[...]``."""
         flat, lead = _floats(query_points, "query_points", 3)
         return self._r.compute_closest_points(flat, _threads(nthreads))[5].reshape(lead)
@@ -221,7 +229,7 @@ class RaycastingScene:
         return self._r.compute_inside(flat, _threads(nthreads), n)
 
     def compute_signed_distance(
-        self, query_points, nthreads: int = 0, nsamples: int = 3
+        self, query_points: ArrayLike, nthreads: int = 0, nsamples: int = 3
     ) -> np.ndarray:
         """Distance to the surface, negative inside: float32 ``[...]``. Inside is decided
         by ``nsamples`` rays in fixed directions, each voting by the parity of its
@@ -231,7 +239,9 @@ class RaycastingScene:
         inside = self._inside(flat, nthreads, nsamples)
         return np.where(inside, -d, d).astype(np.float32).reshape(lead)
 
-    def compute_occupancy(self, query_points, nthreads: int = 0, nsamples: int = 3) -> np.ndarray:
+    def compute_occupancy(
+        self, query_points: ArrayLike, nthreads: int = 0, nsamples: int = 3
+    ) -> np.ndarray:
         """1.0 inside the (closed) surface, 0.0 outside: float32 ``[...]``.
 
         Each of ``nsamples`` rays (fixed directions off the axes) counts its crossings; odd
@@ -241,7 +251,9 @@ class RaycastingScene:
         flat, lead = _floats(query_points, "query_points", 3)
         return self._inside(flat, nthreads, nsamples).astype(np.float32).reshape(lead)
 
-    def trace(self, rays, engine: str = "auto", nthreads: int = 0) -> Dict[str, np.ndarray]:
+    def trace(
+        self, rays: ArrayLike, engine: str = "auto", nthreads: int = 0
+    ) -> Dict[str, np.ndarray]:
         """whitted's own closest-hit record for ``rays`` ``[..., 6]``: ``t``, ``tri`` (index
         into all geometries' triangles in order of addition), ``b1``, ``b2``, exactly as the
         Rust engine ``engine`` returns them."""
@@ -256,14 +268,20 @@ class RaycastingScene:
 
     @property
     def triangle_count(self) -> int:
+        """Triangles in all geometries."""
         return self._r.triangle_count()
 
     @property
     def geometry_count(self) -> int:
+        """Geometries added."""
         return self._r.geometry_count()
 
 
-def _defines(defines: Optional[Union[Mapping, Iterable[str]]]) -> list:
+Defines = Optional[Union[Mapping[str, Any], Iterable[str]]]
+"""Scene-file overrides: ``{"render.depth": 3}`` or ``["render.depth=3"]``."""
+
+
+def _defines(defines: Defines) -> List[str]:
     if defines is None:
         return []
     if isinstance(defines, Mapping):
@@ -287,7 +305,7 @@ class Scene:
     (``{"render.depth": 3}`` or ``["render.depth=3"]``). ``width`` and ``height`` may be changed
     after loading."""
 
-    def __init__(self, source: Union[str, os.PathLike], defines=None):
+    def __init__(self, source: Union[str, os.PathLike], defines: Defines = None) -> None:
         self._s = _whitted.Scene(os.fspath(source), _defines(defines))
 
     @classmethod
@@ -299,7 +317,7 @@ class Scene:
         return cls(name)
 
     @classmethod
-    def load(cls, path: Union[str, os.PathLike], defines=None) -> "Scene":
+    def load(cls, path: Union[str, os.PathLike], defines: Defines = None) -> "Scene":
         return cls(path, defines)
 
     @property
@@ -307,7 +325,7 @@ class Scene:
         return self._s.width
 
     @width.setter
-    def width(self, w: int):
+    def width(self, w: int) -> None:
         self._s.width = int(w)
 
     @property
@@ -315,7 +333,7 @@ class Scene:
         return self._s.height
 
     @height.setter
-    def height(self, h: int):
+    def height(self, h: int) -> None:
         self._s.height = int(h)
 
     @property
@@ -323,13 +341,13 @@ class Scene:
         return self._s.triangle_count
 
     @property
-    def warnings(self) -> list:
+    def warnings(self) -> List[str]:
         return list(self._s.warnings)
 
     def render(
         self, spp: int = 1, depth: Optional[int] = None, threads: int = 0,
-        stage: Optional[str] = None, aov: Sequence[str] = (), engine: str = "auto",
-    ):
+        stage: Optional[str] = None, aov: Union[str, Sequence[str]] = (), engine: str = "auto",
+    ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
         """Render: linear float32 ``[H, W, 3]``, or ``(image, aovs)`` when ``aov`` names
         layers (``"albedo"``, ``"normal"`` ``[H, W, 3]``, ``"depth"`` float32 ``[H, W]``,
         ``"id"`` uint32 ``[H, W]``)."""
@@ -356,9 +374,9 @@ class Scene:
 def render(
     scene: Union[str, os.PathLike, Scene] = "demo", width: Optional[int] = None,
     height: Optional[int] = None, spp: int = 1, depth: Optional[int] = None,
-    threads: int = 0, stage: Optional[str] = None, defines=None,
-    aov: Sequence[str] = (), engine: str = "auto",
-):
+    threads: int = 0, stage: Optional[str] = None, defines: Defines = None,
+    aov: Union[str, Sequence[str]] = (), engine: str = "auto",
+) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
     """Render ``scene`` (a built-in name, a scene file, a mesh file or a ``Scene``) and
     return linear float32 ``[H, W, 3]``, or ``(image, aovs)`` when ``aov`` names layers.
     ``width``/``height`` default to the scene's; ``defines`` override scene-file keys."""

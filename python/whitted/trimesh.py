@@ -11,7 +11,10 @@ trimesh itself is not imported here: any object with ``vertices``, ``faces`` and
 
 from __future__ import annotations
 
+from typing import Any, Literal, Optional, Tuple, Union, overload
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import RaycastingScene
 
@@ -30,10 +33,10 @@ class RayMeshIntersector:
     """trimesh's ray queries on whitted's BVH. The BVH is built at the first query; make a
     new intersector after changing the mesh."""
 
-    def __init__(self, mesh, scale_to_box: bool = True):
+    def __init__(self, mesh: Any, scale_to_box: bool = True) -> None:
         self.mesh = mesh
         self._scale_to_box = scale_to_box
-        self._scene = None
+        self._scene: Optional[RaycastingScene] = None
 
     @property
     def scene(self) -> RaycastingScene:
@@ -67,10 +70,22 @@ class RayMeshIntersector:
             scale = float(np.ptp(v, axis=0).max()) if len(v) else 1.0
         return max(1e-8, 1e-6 * float(scale))
 
+    @overload
     def intersects_id(
-        self, ray_origins, ray_directions, multiple_hits: bool = True, max_hits: int = 100,
-        return_locations: bool = False,
-    ):
+        self, ray_origins: ArrayLike, ray_directions: ArrayLike, multiple_hits: bool = ...,
+        max_hits: int = ..., return_locations: Literal[False] = ...,
+    ) -> Tuple[np.ndarray, np.ndarray]: ...
+
+    @overload
+    def intersects_id(
+        self, ray_origins: ArrayLike, ray_directions: ArrayLike, multiple_hits: bool = ...,
+        max_hits: int = ..., *, return_locations: Literal[True],
+    ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+    def intersects_id(
+        self, ray_origins: ArrayLike, ray_directions: ArrayLike, multiple_hits: bool = True,
+        max_hits: int = 100, return_locations: bool = False,
+    ) -> Union[Tuple[np.ndarray, np.ndarray], Tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Triangles hit by each ray: ``index_tri`` and ``index_ray`` (int64 ``(m,)``), and
         ``locations`` (float64 ``(m, 3)``) when ``return_locations``. With
         ``multiple_hits`` every crossing (at most ``max_hits`` per ray) in order along each
@@ -105,14 +120,16 @@ class RayMeshIntersector:
             return index_tri, index_ray, locations.reshape(-1, 3)
         return index_tri, index_ray
 
-    def intersects_location(self, ray_origins, ray_directions, multiple_hits: bool = True):
+    def intersects_location(
+        self, ray_origins: ArrayLike, ray_directions: ArrayLike, multiple_hits: bool = True
+    ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where rays hit: ``locations`` (float64 ``(m, 3)``), ``index_ray``, ``index_tri``."""
         index_tri, index_ray, locations = self.intersects_id(
             ray_origins, ray_directions, multiple_hits=multiple_hits, return_locations=True
         )
         return locations, index_ray, index_tri
 
-    def intersects_first(self, ray_origins, ray_directions) -> np.ndarray:
+    def intersects_first(self, ray_origins: ArrayLike, ray_directions: ArrayLike) -> np.ndarray:
         """Index of the first triangle each ray hits, -1 for none: int64 ``(n,)``."""
         _, _, rays = self._rays(ray_origins, ray_directions)
         r = self.scene.cast_rays(rays)
@@ -120,12 +137,12 @@ class RayMeshIntersector:
         first[r["geometry_ids"] == RaycastingScene.INVALID_ID] = -1
         return first
 
-    def intersects_any(self, ray_origins, ray_directions) -> np.ndarray:
+    def intersects_any(self, ray_origins: ArrayLike, ray_directions: ArrayLike) -> np.ndarray:
         """Whether each ray hits the surface: bool ``(n,)``."""
         _, _, rays = self._rays(ray_origins, ray_directions)
         return self.scene.test_occlusions(rays)
 
-    def contains_points(self, points) -> np.ndarray:
+    def contains_points(self, points: ArrayLike) -> np.ndarray:
         """Whether each point is inside the (closed) mesh: bool ``(n,)``, by a majority of
         ray parity votes in 5 directions (``RaycastingScene.compute_occupancy``). Points on
         the surface may go either way."""
