@@ -294,16 +294,14 @@ fn cmd_trace_rays(args: TraceArgs) -> Result<()> {
         .map(|t| t.map(|i| mesh.positions[i as usize]))
         .collect();
     let accel = whitted::accel::Accel::build(&tris, whitted::accel::BuildQuality::default());
-    let bytes = std::fs::read(&args.rays).map_err(|e| Error::io(&args.rays, e))?;
-    let rays = whitted::io::rays::parse_rays(&bytes, &args.rays)?;
+    let rays = whitted::io::rays::read_rays(&args.rays)?;
     let start = std::time::Instant::now();
     let cpu = cpu_time::ProcessTime::now();
     // (auto's choice is timed: it is part of every auto batch)
     let (hits, chosen) = whitted::trace::trace_rays_with(&accel, &rays, engine, args.cull);
     let secs = start.elapsed().as_secs_f64();
     let cpu = cpu.elapsed().as_secs_f64();
-    std::fs::write(&args.hits, whitted::io::rays::encode_hits(&hits))
-        .map_err(|e| Error::io(&args.hits, e))?;
+    whitted::io::rays::save_hits(&args.hits, &hits)?;
     println!(
         "{} rays, {} hits, {:.3} s, {:.2} Mrays/s, CPU {:.3} s ({} engine, {} triangles, BVH {:.1} ms)",
         rays.len(),

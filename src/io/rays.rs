@@ -8,6 +8,7 @@
 use crate::error::{Error, Result};
 use crate::ray::{Hit, Ray};
 use glam::Vec3;
+use std::io::{Read, Write};
 use std::path::Path;
 
 /// Bytes of one ray record.
@@ -18,27 +19,60 @@ pub const HIT_BYTES: usize = 16;
 /// Parse a ray file's bytes; the length must be a whole number of records.
 pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
     if !bytes.len().is_multiple_of(RAY_BYTES) {
-        return Err(Error::parse(
-            path,
-            0,
-            format!(
-                "{} bytes is not a whole number of 32-byte ray records",
-                bytes.len()
-            ),
-        ));
+        return Err(not_whole(bytes.len() as u64, path));
     }
-    Ok(bytes
-        .chunks_exact(RAY_BYTES)
-        .map(|r| {
-            let f = |k: usize| f32::from_le_bytes(r[4 * k..4 * k + 4].try_into().expect("4 bytes"));
-            Ray::new(
-                Vec3::new(f(0), f(1), f(2)),
-                Vec3::new(f(3), f(4), f(5)),
-                f(6),
-                f(7),
-            )
-        })
-        .collect())
+    Ok(bytes.chunks_exact(RAY_BYTES).map(ray_of).collect())
+}
+
+/// The ray file at `path`, read a megabyte at a time into the rays (the file's bytes are
+/// never held whole: a file of 2M rays is 64 MB, and a buffer of it as much again of fresh
+/// pages to fault in and copy). The length must be a whole number of records.
+pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
+    let io = |e| Error::io(path, e);
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let expect = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut rays = Vec::with_capacity(usize::try_from(expect / RAY_BYTES as u64).unwrap_or(0));
+    let mut buf = vec![0u8; 1 << 20];
+    // bytes of `buf` held (a record may straddle two reads), and the file's bytes so far
+    let (mut held, mut total) = (0usize, 0u64);
+    loop {
+        let n = match file.read(&mut buf[held..]) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(io(e)),
+        };
+        total += n as u64;
+        held += n;
+        let whole = held - held % RAY_BYTES;
+        rays.extend(buf[..whole].chunks_exact(RAY_BYTES).map(ray_of));
+        buf.copy_within(whole..held, 0);
+        held -= whole;
+    }
+    if held != 0 {
+        return Err(not_whole(total, path));
+    }
+    Ok(rays)
+}
+
+fn not_whole(bytes: u64, path: &Path) -> Error {
+    Error::parse(
+        path,
+        0,
+        format!("{bytes} bytes is not a whole number of 32-byte ray records"),
+    )
+}
+
+/// One 32-byte record as a ray.
+#[inline]
+fn ray_of(r: &[u8]) -> Ray {
+    let f = |k: usize| f32::from_le_bytes(r[4 * k..4 * k + 4].try_into().expect("4 bytes"));
+    Ray::new(
+        Vec3::new(f(0), f(1), f(2)),
+        Vec3::new(f(3), f(4), f(5)),
+        f(6),
+        f(7),
+    )
 }
 
 /// The bytes of a ray file holding `rays`.
@@ -57,6 +91,12 @@ pub fn encode_rays(rays: &[Ray]) -> Vec<u8> {
 /// The bytes of a hit file holding `hits` (`None` = a miss).
 pub fn encode_hits(hits: &[Option<Hit>]) -> Vec<u8> {
     let mut out = Vec::with_capacity(hits.len() * HIT_BYTES);
+    write_hits(&mut out, hits).expect("writing to a Vec");
+    out
+}
+
+/// `hits` as hit records into `out`, a record at a time (`out` buffers).
+pub fn write_hits(out: &mut impl Write, hits: &[Option<Hit>]) -> std::io::Result<()> {
     for h in hits {
         let h = h.unwrap_or(Hit {
             tri: Hit::NONE_ID,
@@ -64,12 +104,22 @@ pub fn encode_hits(hits: &[Option<Hit>]) -> Vec<u8> {
             b1: 0.0,
             b2: 0.0,
         });
-        out.extend_from_slice(&h.tri.to_le_bytes());
-        for v in [h.t, h.b1, h.b2] {
-            out.extend_from_slice(&v.to_le_bytes());
+        let mut record = [0u8; HIT_BYTES];
+        record[..4].copy_from_slice(&h.tri.to_le_bytes());
+        for (k, v) in [h.t, h.b1, h.b2].into_iter().enumerate() {
+            record[4 + 4 * k..8 + 4 * k].copy_from_slice(&v.to_le_bytes());
         }
+        out.write_all(&record)?;
     }
-    out
+    Ok(())
+}
+
+/// `hits` into the hit file at `path`, through a temporary file renamed into place: a failed
+/// write leaves whatever `path` held (as a render's image file does).
+pub fn save_hits(path: &Path, hits: &[Option<Hit>]) -> Result<()> {
+    crate::io::output::write_atomically(path, |out| {
+        write_hits(out, hits).map_err(|e| Error::io(path, e))
+    })
 }
 
 /// Parse a hit file's bytes; the length must be a whole number of records.
@@ -99,6 +149,53 @@ pub fn parse_hits(bytes: &[u8], path: &Path) -> Result<Vec<Option<Hit>>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The streamed reader gives the in-memory parse's rays and errors, and a hit file
+    /// written through the temporary file holds the records.
+    #[test]
+    fn files_read_and_write_as_the_bytes() {
+        let dir = std::env::temp_dir().join(format!("whitted-rays-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // more than the reader's megabyte, records straddling its reads
+        let rays: Vec<Ray> = (0..40_000)
+            .map(|i| {
+                let x = i as f32;
+                Ray::new(Vec3::new(x, -x, 0.5), Vec3::new(1.0, x, -2.0), 0.0, x)
+            })
+            .collect();
+        let path = dir.join("r.bin");
+        std::fs::write(&path, encode_rays(&rays)).unwrap();
+        assert_eq!(read_rays(&path).unwrap(), rays);
+        std::fs::write(&path, [0u8; 33]).unwrap();
+        let e = read_rays(&path).unwrap_err().to_string();
+        assert!(e.contains("r.bin") && e.contains("33 bytes"), "{e}");
+        std::fs::write(&path, []).unwrap();
+        assert_eq!(read_rays(&path).unwrap(), vec![]);
+        let e = read_rays(&dir.join("missing.bin")).unwrap_err().to_string();
+        assert!(e.contains("missing.bin"), "{e}");
+        let hits: Vec<Option<Hit>> = (0..50_000u32)
+            .map(|i| {
+                (i % 3 != 0).then_some(Hit {
+                    tri: i,
+                    t: i as f32,
+                    b1: 0.25,
+                    b2: 0.5,
+                })
+            })
+            .collect();
+        let out = dir.join("h.bin");
+        save_hits(&out, &hits).unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), encode_hits(&hits));
+        // a failed write (the target is a folder) leaves no temporary file behind
+        assert!(save_hits(&dir, &hits).is_err());
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["h.bin", "r.bin"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn roundtrip_and_bad_length() {
