@@ -195,3 +195,59 @@ fn zip_blocks_that_do_not_shrink_are_stored_raw() {
         }
     }
 }
+
+/// A symbolic link's file is replaced and the link stays a link (relative and dangling links
+/// too); no temporary file is left.
+#[cfg(unix)]
+#[test]
+fn writes_go_through_symbolic_links() {
+    use std::os::unix::fs::symlink;
+    let d = dir("links");
+    std::fs::write(d.join("real.png"), b"old").unwrap();
+    symlink("real.png", d.join("link.png")).unwrap();
+    symlink(d.join("later.png"), d.join("dangling.png")).unwrap();
+    for (link, file) in [("link.png", "real.png"), ("dangling.png", "later.png")] {
+        write_atomically(&d.join(link), |out| {
+            out.write_all(b"new").map_err(|e| Error::io(&d, e))
+        })
+        .unwrap();
+        let meta = std::fs::symlink_metadata(d.join(link)).unwrap();
+        assert!(meta.file_type().is_symlink(), "{link} is no longer a link");
+        assert_eq!(std::fs::read(d.join(file)).unwrap(), b"new");
+    }
+    assert_eq!(
+        listing(&d),
+        ["dangling.png", "later.png", "link.png", "real.png"]
+    );
+}
+
+/// A FIFO (or a device such as `/dev/stdout`) is written into, not replaced by a rename.
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_written_into() {
+    let d = dir("fifo");
+    let pipe = d.join("hits.bin");
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo did not run: skipped");
+        return;
+    }
+    let reader = {
+        let pipe = pipe.clone();
+        std::thread::spawn(move || std::fs::read(pipe).unwrap())
+    };
+    write_atomically(&pipe, |out| {
+        out.write_all(b"through the pipe")
+            .map_err(|e| Error::io(&pipe, e))
+    })
+    .unwrap();
+    assert_eq!(reader.join().unwrap(), b"through the pipe");
+    use std::os::unix::fs::FileTypeExt;
+    assert!(
+        std::fs::symlink_metadata(&pipe)
+            .unwrap()
+            .file_type()
+            .is_fifo()
+    );
+    assert_eq!(listing(&d), ["hits.bin"]);
+}
