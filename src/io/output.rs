@@ -193,7 +193,8 @@ pub(crate) fn write_atomically(
 ) -> Result<()> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     // (the kernel follows the links, magic ones such as /dev/stdout's too)
-    let target = match std::fs::metadata(path) {
+    let existing = std::fs::metadata(path);
+    let target = match &existing {
         Ok(m) if m.is_dir() => {
             return Err(Error::Usage(format!(
                 "{}: is a folder, not a file",
@@ -222,6 +223,11 @@ pub(crate) fn write_atomically(
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
     let file = File::create_new(&tmp).map_err(|e| Error::io(path, e))?;
+    // a file replaced keeps its permissions (a group-writable image in a shared folder stays
+    // so); a failure to carry them over leaves the new file's defaults
+    if let Ok(m) = &existing {
+        let _ = file.set_permissions(m.permissions());
+    }
     let mut out = BufWriter::with_capacity(1 << 20, EarlyWriteback::new(file));
     let result = write(&mut out)
         .and_then(|()| out.flush().map_err(|e| Error::io(path, e)))

@@ -251,3 +251,23 @@ fn a_fifo_is_written_into() {
     );
     assert_eq!(listing(&d), ["hits.bin"]);
 }
+
+/// A file replaced keeps its permissions.
+#[cfg(unix)]
+#[test]
+fn a_replaced_file_keeps_its_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = dir("mode");
+    let f = d.join("img.png");
+    std::fs::write(&f, b"old").unwrap();
+    std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o640)).unwrap();
+    write_atomically(&f, |out| {
+        out.write_all(b"new").map_err(|e| Error::io(&f, e))
+    })
+    .unwrap();
+    assert_eq!(std::fs::read(&f).unwrap(), b"new");
+    assert_eq!(
+        std::fs::metadata(&f).unwrap().permissions().mode() & 0o777,
+        0o640
+    );
+}
