@@ -45,19 +45,67 @@ pub fn save_exr_with_aovs(beauty: &Image, aovs: &AovImages, path: &Path) -> Resu
     }
     let channels = AnyChannels::sort(list.into());
     let image = exr::image::Image::from_channels((beauty.width, beauty.height), channels);
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp{}",
-        path.file_name()
-            .map_or("out".into(), |n| n.to_string_lossy()),
-        std::process::id()
-    ));
-    let result = image
-        .write()
-        .to_file(&tmp)
-        .map_err(|e| crate::Error::image(path, format!("cannot write EXR: {e}")))
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| crate::Error::io(path, e)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    // through the writer every output uses (a temporary file renamed into place)
+    crate::io::output::write_atomically(path, |out| {
+        image
+            .write()
+            .to_buffered(out)
+            .map_err(|e| crate::Error::image(path, format!("cannot write EXR: {e}")))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// The layers come back from the file as written, and a failed write (the target is a
+    /// folder) leaves no temporary file.
+    #[test]
+    fn layers_read_back_as_written() {
+        let d = std::env::temp_dir().join(format!("whitted-aov-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        let (w, h) = (5, 3);
+        let px: Vec<Vec3> = (0..w * h).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect();
+        let beauty = crate::image::Image {
+            width: w,
+            height: h,
+            pixels: px.clone(),
+        };
+        let aovs = AovImages {
+            width: w,
+            height: h,
+            albedo: None,
+            normal: Some(px.iter().map(|p| Vec3::new(p.y, p.z, p.x)).collect()),
+            depth: Some((0..w * h).map(|i| i as f32 * 0.25).collect()),
+            id: Some((0..(w * h) as u32).collect()),
+        };
+        let path = d.join("layers.exr");
+        save_exr_with_aovs(&beauty, &aovs, &path).unwrap();
+        use exr::prelude::*;
+        let image = read_all_flat_layers_from_file(&path).unwrap();
+        let channels = &image.layer_data[0].channel_data.list;
+        let named = |n: &str| {
+            channels
+                .iter()
+                .find(|c| c.name == *n)
+                .unwrap_or_else(|| panic!("channel {n}"))
+        };
+        let f32s = |n: &str| named(n).sample_data.values_as_f32().collect::<Vec<f32>>();
+        assert_eq!(f32s("R"), px.iter().map(|p| p.x).collect::<Vec<_>>());
+        assert_eq!(f32s("normal.X"), px.iter().map(|p| p.y).collect::<Vec<_>>());
+        assert_eq!(f32s("depth.Z")[7], 1.75);
+        match &named("id.id").sample_data {
+            FlatSamples::U32(ids) => assert_eq!(ids, &(0..(w * h) as u32).collect::<Vec<_>>()),
+            other => panic!("id as {other:?}"),
+        }
+        assert!(save_exr_with_aovs(&beauty, &aovs, &d).is_err());
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["layers.exr"]);
+        std::fs::remove_dir_all(&d).unwrap();
     }
-    result
 }
