@@ -109,7 +109,8 @@ fn gather(
             od[a][i] = c[a];
         }
     }
-    out.od = vec3x8(&od);
+    // (`od` is loaded as vectors only after the materials: right after the lane loop, the
+    // loads waited on its last scalar stores)
     let first = material[bits.trailing_zeros() as usize % LANES];
     if active().all(|i| material[i] == first) {
         // one material: its constants splatted (the inactive lanes zeroed by the mask, as
@@ -125,6 +126,7 @@ fn gather(
         out.ior = simd::select(on, simd::splat(m.ior), simd::splat(0.0));
         out.emits = if m.emits() { bits } else { 0 };
         out.uniform = Some(first);
+        out.od = vec3x8(&od);
         return out;
     }
     let mut kc = [[[0.0; LANES]; 3]; 6];
@@ -142,6 +144,7 @@ fn gather(
     }
     out.kc = kc.map(|c| vec3x8(&c));
     (out.n, out.ior) = (simd::from_lanes(n), simd::from_lanes(ior));
+    out.od = vec3x8(&od);
     out
 }
 
