@@ -1,4 +1,5 @@
 use super::*;
+use std::path::PathBuf;
 
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("whitted-out-{}-{name}", std::process::id()));
