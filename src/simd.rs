@@ -87,6 +87,11 @@ pub fn none(m: M32x8) -> bool {
 pub fn bitmask(m: M32x8) -> u32 {
     m.to_bitmask()
 }
+/// The lanes of `v`, whole numbers in `i32`'s range, as integers.
+#[inline(always)]
+pub fn int_lanes(v: F32x8) -> [i32; 8] {
+    v.fast_trunc_int().to_array()
+}
 /// `a & !b`.
 #[inline(always)]
 pub fn and_not(a: M32x8, b: M32x8) -> M32x8 {

@@ -1,6 +1,7 @@
 //! Textures (bilinear; wrap = repeat unless a material asks for mirrored repeat or clamp to
 //! edge) and cube maps (OpenGL faces, clamp to edge), SCENES.md §4.
 
+use crate::simd::{self, Vec3x8};
 use glam::{Vec2, Vec3};
 
 /// A linear-RGB image used for lookups. Row 0 is the top row of the image file.
@@ -163,6 +164,89 @@ impl CubeMap {
             [Wrap::Clamp; 2],
         )
     }
+
+    /// Whether every face has the first face's size (as the loaders make them): what
+    /// [`CubeMap::footprint8`] needs.
+    pub fn faces_alike(&self) -> bool {
+        let (w, h) = (self.faces[0].width, self.faces[0].height);
+        self.faces.iter().all(|f| f.width == w && f.height == h)
+    }
+
+    /// Where [`CubeMap::sample`] reads for eight directions at once: the face, the bilinear
+    /// footprint's columns and rows (clamped) and its weights, in lanes, by the same IEEE
+    /// operations in the same order as [`CubeMap::face_st`] and [`Texture::bilinear`], so
+    /// that [`CubeMap::blend`] of a lane is `sample`'s colour to the bit. Without branches:
+    /// the renderer looks up the background for every ray that escapes, and the scalar
+    /// face choice mispredicts wherever neighbouring rays see different faces. Every face
+    /// must have the first face's size ([`CubeMap::faces_alike`]).
+    #[inline(always)]
+    pub fn footprint8(&self, d: Vec3x8) -> Footprint8 {
+        use crate::simd::{ge, gt, select, splat};
+        let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
+        // the major axis as `face_st` picks it (ties to x, then y; NaN to z)
+        let xm = ge(ax, ay) & ge(ax, az);
+        let ym = !xm & ge(ay, az);
+        let pos = select(
+            xm,
+            gt(d.x, splat(0.0)),
+            select(ym, gt(d.y, splat(0.0)), gt(d.z, splat(0.0))),
+        );
+        let face = select(xm, splat(0.0), select(ym, splat(2.0), splat(4.0)))
+            + select(pos, splat(0.0), splat(1.0));
+        let sc = select(
+            xm,
+            select(pos, -d.z, d.z),
+            select(ym, d.x, select(pos, d.x, -d.x)),
+        );
+        let tc = select(ym, select(pos, d.z, -d.z), -d.y);
+        let ma = select(xm, ax, select(ym, ay, az));
+        let (one, half) = (splat(1.0), splat(0.5));
+        let s = (sc / ma + one) * half;
+        let t = (tc / ma + one) * half;
+        let (w, h) = (self.faces[0].width as f32, self.faces[0].height as f32);
+        let x = s * splat(w) - half;
+        let y = t * splat(h) - half;
+        // `bilinear`: non-finite coordinates look up texel 0
+        let finite = x.is_finite() & y.is_finite();
+        let (x, y) = (select(finite, x, splat(0.0)), select(finite, y, splat(0.0)));
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        // clamp to edge: the floored coordinates are whole numbers in [-1, size - 1], so
+        // clamping them as floats is the scalar integer clamp
+        let clamp = |v: simd::F32x8, n: f32| simd::int_lanes(v.max(splat(0.0)).min(splat(n - 1.0)));
+        Footprint8 {
+            face: simd::int_lanes(face),
+            x: [clamp(x0, w), clamp(x0 + one, w)],
+            y: [clamp(y0, h), clamp(y0 + one, h)],
+            fx: simd::lanes(fx),
+            fy: simd::lanes(fy),
+        }
+    }
+
+    /// Lane `i`'s colour from [`CubeMap::footprint8`]: [`Texture::bilinear`]'s blend of the
+    /// four texels, equal to [`CubeMap::sample`] of that lane's direction.
+    #[inline(always)]
+    pub fn blend(&self, p: &Footprint8, i: usize) -> Vec3 {
+        let f = &self.faces[p.face[i] as usize];
+        let texel = |x: i32, y: i32| f.texels[y as usize * f.width + x as usize];
+        let ([x0, x1], [y0, y1]) = ([p.x[0][i], p.x[1][i]], [p.y[0][i], p.y[1][i]]);
+        let (fx, fy) = (p.fx[i], p.fy[i]);
+        let top = texel(x0, y0) * (1.0 - fx) + texel(x1, y0) * fx;
+        let bottom = texel(x0, y1) * (1.0 - fx) + texel(x1, y1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+}
+
+/// Eight cube-map lookups' faces, bilinear footprints and weights ([`CubeMap::footprint8`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Footprint8 {
+    face: [i32; 8],
+    /// The footprint's two columns, clamped to the face.
+    x: [[i32; 8]; 2],
+    /// Its two rows.
+    y: [[i32; 8]; 2],
+    fx: [f32; 8],
+    fy: [f32; 8],
 }
 
 #[cfg(test)]
@@ -316,5 +400,92 @@ mod tests {
         assert_eq!(cm.sample(Vec3::new(0.0, 0.9, 1.0)), Vec3::X);
         assert_eq!(cm.sample(Vec3::new(0.0, -0.9, 1.0)), Vec3::ZERO);
         assert_eq!(cm.sample(Vec3::new(0.0, 0.9, -1.0)), Vec3::Y);
+    }
+
+    /// A cube map of `n x n` faces whose texels all differ (so a wrong face or texel shows).
+    fn numbered_cube(n: usize) -> CubeMap {
+        let face = |f: usize| {
+            let texels = (0..n * n)
+                .map(|i| {
+                    let k = (f * n * n + i) as f32;
+                    Vec3::new(k + 0.25, 1.0 / (k + 1.5), k * k * 0.01 - 3.0)
+                })
+                .collect();
+            Texture::new(n, n, texels)
+        };
+        CubeMap {
+            faces: std::array::from_fn(face),
+        }
+    }
+
+    /// Every lane of `footprint8` + `blend` against `sample`, bit for bit.
+    fn assert_lanes_match(cm: &CubeMap, dirs: &[Vec3]) {
+        for group in dirs.chunks(8) {
+            let lane = |i: usize| group.get(i).copied().unwrap_or(Vec3::X).to_array();
+            let p = cm.footprint8(Vec3x8::from_fn(lane));
+            for (i, &d) in group.iter().enumerate() {
+                let (want, got) = (cm.sample(d), cm.blend(&p, i));
+                assert_eq!(
+                    want.to_array().map(f32::to_bits),
+                    got.to_array().map(f32::to_bits),
+                    "direction {d:?}: sample {want}, lanes {got}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn cube_lanes_equal_the_scalar_lookup_on_edges_ties_and_odd_values() {
+        let mut dirs = Vec::new();
+        // the axes, the ties between them (face choice), face edges and corners
+        for v in [-1.0f32, -0.5, 0.0, 0.5, 1.0] {
+            for w in [-1.0f32, -0.999_999, 0.0, 1e-30, 0.999_999, 1.0] {
+                for u in [-1.0f32, 1.0, -0.0, 2.0] {
+                    dirs.extend([Vec3::new(u, v, w), Vec3::new(v, u, w), Vec3::new(w, v, u)]);
+                }
+            }
+        }
+        // no direction, NaN, infinities, denormals, huge and tiny lengths
+        let odd = [
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            -f32::INFINITY,
+            1e-45,
+            3e38,
+            -1e-20,
+        ];
+        for &a in &odd {
+            for &b in &odd {
+                dirs.extend([
+                    Vec3::new(a, b, 0.3),
+                    Vec3::new(0.3, a, b),
+                    Vec3::new(b, 0.3, a),
+                ]);
+            }
+        }
+        for n in [1, 2, 5, 16] {
+            assert_lanes_match(&numbered_cube(n), &dirs);
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn cube_lanes_equal_the_scalar_lookup(
+            dirs in proptest::collection::vec(proptest::array::uniform3(-1.0f32..1.0), 1..40),
+            n in 1usize..9,
+        ) {
+            let dirs: Vec<Vec3> = dirs.into_iter().map(Vec3::from_array).collect();
+            assert_lanes_match(&numbered_cube(n), &dirs);
+        }
+    }
+
+    #[test]
+    fn faces_alike_only_when_every_face_has_the_first_size() {
+        let mut cm = numbered_cube(3);
+        assert!(cm.faces_alike());
+        cm.faces[4] = Texture::new(2, 2, vec![Vec3::ONE; 4]);
+        assert!(!cm.faces_alike());
     }
 }

@@ -16,6 +16,7 @@ use crate::accel::{
 use crate::camera::Camera;
 use crate::packet::RayPacket8;
 use crate::packet::{HitPacket8, PacketShape, camera_packet};
+use crate::scene::Background;
 use crate::shade::{Shade8, shade8_in};
 use crate::simd::M32x8;
 use crate::simd::{self, LANES, Vec3x8};
@@ -292,15 +293,33 @@ fn intersect_closest(
     }
 }
 
-/// Rays that hit nothing take the background, times their weight.
+/// Rays that hit nothing take the background, times their weight. A cube map is looked up
+/// a packet at a time: the faces and footprints of its eight directions in lanes
+/// (`CubeMap::footprint8`), then each escaped lane's four texels.
 fn handle_escaped_rays(world: &World, rays: &RayQueue, hits: &[HitPacket8], accum: &mut [Vec3]) {
+    let cube = match &world.scene.background {
+        Background::CubeMap(m) if m.faces_alike() => Some(&**m),
+        _ => None,
+    };
     for (p, h) in hits.iter().enumerate() {
         let start = p * LANES;
         let missed = !simd::bitmask(h.hit_mask()) & ((1u32 << (rays.len() - start).min(LANES)) - 1);
-        for i in (0..LANES).filter(|&i| missed >> i & 1 == 1) {
-            let j = start + i;
-            accum[rays.pixel[j] as usize] +=
-                rays.weight(j) * world.scene.background.sample(rays.ray(j).dir);
+        if missed == 0 {
+            continue;
+        }
+        let lanes = (0..LANES).filter(|&i| missed >> i & 1 == 1);
+        if let Some(m) = cube {
+            let footprint = m.footprint8(Vec3x8::load(&rays.d, start, 1.0));
+            for i in lanes {
+                let j = start + i;
+                accum[rays.pixel[j] as usize] += rays.weight(j) * m.blend(&footprint, i);
+            }
+        } else {
+            for i in lanes {
+                let j = start + i;
+                accum[rays.pixel[j] as usize] +=
+                    rays.weight(j) * world.scene.background.sample(rays.ray(j).dir);
+            }
         }
     }
 }
