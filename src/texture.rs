@@ -4,18 +4,54 @@
 use crate::simd::{self, Vec3x8};
 use glam::{Vec2, Vec3};
 
-/// A linear-RGB image used for lookups. Row 0 is the top row of the image file.
+/// An image used for lookups, read as linear RGB. Row 0 is the top row of the image file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     /// Width in texels.
     pub width: usize,
     /// Height in texels.
     pub height: usize,
-    /// `width * height` linear RGB texels, row-major.
-    pub texels: Vec<Vec3>,
+    /// `width * height` texels, row-major.
+    texels: Texels,
     /// How [`Texture::sample_uv`] treats texels outside the image, along `u` then `v`
     /// ([`Wrap::Repeat`] for both unless set).
     pub wrap: [Wrap; 2],
+}
+
+/// How a texture keeps its texels.
+#[derive(Clone, Debug, PartialEq)]
+enum Texels {
+    /// Linear RGB floats (HDR, EXR and 16-bit images, and textures made in code).
+    Linear(Vec<Vec3>),
+    /// sRGB-encoded 8-bit RGB, three bytes a texel, as an 8-bit image file holds them:
+    /// decoded on lookup through [`srgb8_table`], which gives what converting the whole
+    /// image at load gave, bit for bit, in a quarter of the memory and without the pass.
+    Srgb8(Vec<u8>, Table),
+}
+
+/// [`srgb8_table`], held by the textures that read through it (no check of its
+/// initialisation on every lookup).
+#[derive(Clone, Copy)]
+struct Table(&'static [f32; 256]);
+
+impl std::fmt::Debug for Table {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("sRGB 8-bit table")
+    }
+}
+
+impl PartialEq for Table {
+    fn eq(&self, _: &Table) -> bool {
+        true // there is one table
+    }
+}
+
+/// Linear values of the 256 sRGB-encoded 8-bit levels (the exact formula in f64, rounded to
+/// f32 once).
+pub fn srgb8_table() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE
+        .get_or_init(|| std::array::from_fn(|v| crate::image::srgb_decode(v as f64 / 255.0) as f32))
 }
 
 /// How lookups outside `[0, w) x [0, h)` behave: the texel a bilinear lookup reads for an
@@ -47,15 +83,77 @@ impl Wrap {
 }
 
 impl Texture {
-    /// A texture from its texels; panics unless there are `width * height > 0` of them.
+    /// A texture from its linear RGB texels; panics unless there are `width * height > 0`.
     pub fn new(width: usize, height: usize, texels: Vec<Vec3>) -> Self {
         assert_eq!(texels.len(), width * height, "texture size");
         assert!(width > 0 && height > 0, "empty texture");
         Texture {
             width,
             height,
-            texels,
+            texels: Texels::Linear(texels),
             wrap: [Wrap::Repeat; 2],
+        }
+    }
+
+    /// A texture from sRGB-encoded 8-bit RGB bytes (three a texel, row-major), kept as they
+    /// are and decoded on lookup ([`srgb8_table`]); panics unless there are
+    /// `3 * width * height > 0` bytes.
+    pub fn from_srgb8(width: usize, height: usize, rgb: Vec<u8>) -> Self {
+        assert_eq!(rgb.len(), 3 * width * height, "texture size");
+        assert!(width > 0 && height > 0, "empty texture");
+        Texture {
+            width,
+            height,
+            texels: Texels::Srgb8(rgb, Table(srgb8_table())),
+            wrap: [Wrap::Repeat; 2],
+        }
+    }
+
+    /// Texel `i` (row-major) in linear RGB.
+    #[inline(always)]
+    pub fn texel_at(&self, i: usize) -> Vec3 {
+        match &self.texels {
+            Texels::Linear(t) => t[i],
+            Texels::Srgb8(b, Table(table)) => {
+                // the texel's three bytes in one load (with the next texel's first, unused),
+                // but for the last texel
+                let at = 3 * i;
+                let v = match b.get(at..at + 4) {
+                    Some(w) => u32::from_le_bytes([w[0], w[1], w[2], w[3]]),
+                    None => u32::from_le_bytes([b[at], b[at + 1], b[at + 2], 0]),
+                };
+                Vec3::new(
+                    table[(v & 255) as usize],
+                    table[(v >> 8 & 255) as usize],
+                    table[(v >> 16 & 255) as usize],
+                )
+            }
+        }
+    }
+
+    /// Every texel in linear RGB, row-major.
+    pub fn linear_texels(&self) -> Vec<Vec3> {
+        match &self.texels {
+            Texels::Linear(t) => t.clone(),
+            Texels::Srgb8(..) => (0..self.width * self.height)
+                .map(|i| self.texel_at(i))
+                .collect(),
+        }
+    }
+
+    /// The linear RGB texels, without a copy where they are kept that way.
+    pub fn into_linear_texels(self) -> Vec<Vec3> {
+        match self.texels {
+            Texels::Linear(t) => t,
+            Texels::Srgb8(..) => self.linear_texels(),
+        }
+    }
+
+    /// Bytes the texels take.
+    pub fn texel_bytes(&self) -> usize {
+        match &self.texels {
+            Texels::Linear(t) => std::mem::size_of_val(t.as_slice()),
+            Texels::Srgb8(b, _) => b.len(),
         }
     }
 
@@ -84,7 +182,7 @@ impl Texture {
     fn texel(&self, x: i64, y: i64, [wrap_x, wrap_y]: [Wrap; 2]) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
         let (x, y) = (wrap_x.index(x, w), wrap_y.index(y, h));
-        self.texels[(y * w + x) as usize]
+        self.texel_at((y * w + x) as usize)
     }
 
     /// Bilinear lookup at continuous texel coordinates (texel centres at `i + 0.5`... shifted
@@ -228,7 +326,7 @@ impl CubeMap {
     #[inline(always)]
     pub fn blend(&self, p: &Footprint8, i: usize) -> Vec3 {
         let f = &self.faces[p.face[i] as usize];
-        let texel = |x: i32, y: i32| f.texels[y as usize * f.width + x as usize];
+        let texel = |x: i32, y: i32| f.texel_at(y as usize * f.width + x as usize);
         let ([x0, x1], [y0, y1]) = ([p.x[0][i], p.x[1][i]], [p.y[0][i], p.y[1][i]]);
         let (fx, fy) = (p.fx[i], p.fy[i]);
         let top = texel(x0, y0) * (1.0 - fx) + texel(x1, y0) * fx;
@@ -478,6 +576,47 @@ mod tests {
         ) {
             let dirs: Vec<Vec3> = dirs.into_iter().map(Vec3::from_array).collect();
             assert_lanes_match(&numbered_cube(n), &dirs);
+        }
+    }
+
+    /// An sRGB 8-bit texture reads every level as the linear float the table gives, on every
+    /// texel, the last one (read without the 4-byte load) included, and samples as the
+    /// same image converted to floats up front.
+    #[test]
+    fn srgb8_texels_read_as_their_linear_values() {
+        let (w, h) = (7, 5);
+        let bytes: Vec<u8> = (0..3 * w * h).map(|i| (i * 37 % 256) as u8).collect();
+        let tex = Texture::from_srgb8(w, h, bytes.clone());
+        let table = srgb8_table();
+        let linear: Vec<Vec3> = bytes
+            .chunks_exact(3)
+            .map(|c| {
+                Vec3::new(
+                    table[c[0] as usize],
+                    table[c[1] as usize],
+                    table[c[2] as usize],
+                )
+            })
+            .collect();
+        for (i, &want) in linear.iter().enumerate() {
+            assert_eq!(tex.texel_at(i), want, "texel {i}");
+        }
+        assert_eq!(tex.linear_texels(), linear);
+        assert_eq!(tex.texel_bytes(), 3 * w * h);
+        let floats = Texture::new(w, h, linear);
+        assert_eq!(floats.texel_bytes(), 12 * w * h);
+        for k in 0..200 {
+            let uv = Vec2::new(k as f32 * 0.0173 - 0.6, k as f32 * 0.0291 - 1.3);
+            let (a, b) = (tex.sample_uv(uv), floats.sample_uv(uv));
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits)
+            );
+        }
+        // the table is the exact formula, rounded once; its ends are exact
+        assert_eq!((table[0], table[255]), (0.0, 1.0));
+        for (v, &t) in table.iter().enumerate() {
+            assert_eq!(t, crate::image::srgb_decode(v as f64 / 255.0) as f32);
         }
     }
 

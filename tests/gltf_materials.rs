@@ -105,7 +105,7 @@ fn an_embedded_texture_keeps_its_texels_and_wrap_modes() {
         panic!("not textured: {:?}", m.albedo)
     };
     assert_eq!(t.wrap, [Wrap::MirroredRepeat, Wrap::Clamp]);
-    assert_eq!(t.texels, [Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE]);
+    assert_eq!(t.linear_texels(), [Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE]);
     // Texel centres by hand (x = 2u - 0.5, y = 2(1 - v) - 0.5; row 0 is red, green):
     // u = -0.25 is column -1, mirrored to 0 (repeat would read column 1, green).
     assert_eq!(t.sample_uv(Vec2::new(-0.25, 0.75)), Vec3::X);

@@ -93,29 +93,29 @@ pub fn decode_texture_capped(
         channels: color.channel_count() as usize,
         bits: (color.bits_per_pixel() / color.channel_count().max(1) as u16) as usize,
     };
-    let texels = if matches!(
+    let texture = if matches!(
         img,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
     ) {
-        img.into_rgb32f()
+        let texels = img
+            .into_rgb32f()
             .pixels()
             .map(|p| Vec3::from(p.0.map(|c| if c.is_finite() { c } else { 0.0 })))
-            .collect()
-    } else if info.bits == 8 {
-        let lut: Vec<f32> = (0..256)
-            .map(|v| srgb_decode(v as f64 / 255.0) as f32)
             .collect();
-        img.into_rgb8()
-            .pixels()
-            .map(|p| p.0.map(|c| lut[c as usize]).into())
-            .collect()
+        Texture::new(w, h, texels)
+    } else if info.bits == 8 {
+        // kept as the file's sRGB bytes, decoded on lookup: a quarter of the memory of
+        // linear floats, and no pass over the image here
+        Texture::from_srgb8(w, h, img.into_rgb8().into_raw())
     } else {
-        img.into_rgb32f()
+        let texels = img
+            .into_rgb32f()
             .pixels()
             .map(|p| Vec3::from(p.0.map(|c| srgb_decode(c as f64) as f32)))
-            .collect()
+            .collect();
+        Texture::new(w, h, texels)
     };
-    Ok((Texture::new(w, h, texels), info))
+    Ok((texture, info))
 }
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
@@ -318,7 +318,7 @@ pub fn load_exr_image(path: &Path) -> Result<Image> {
     Ok(Image {
         width: t.width,
         height: t.height,
-        pixels: t.texels,
+        pixels: t.into_linear_texels(),
     })
 }
 
@@ -355,8 +355,10 @@ mod tests {
         assert!(
             cube.faces
                 .iter()
-                .all(|f| f.texels.iter().all(|t| t.y == texel))
+                .all(|f| f.linear_texels().iter().all(|t| t.y == texel))
         );
+        // 8-bit faces are kept as their bytes, three a texel
+        assert!(cube.faces.iter().all(|f| f.texel_bytes() == 3 * 4 * 4));
         for bad in [[2, 5], [5, 2], [0, 1]] {
             let e = decode_cubemap(pick(&bad)).unwrap_err().to_string();
             let first = CUBE_FACES[bad[0].min(bad[1])];

@@ -183,7 +183,7 @@ fn embedded_base_colour_textures_keep_their_wrap_modes() {
     );
     let tex = image_in(&bytes, Path::new("t.glb"), 0, &mut no_files).unwrap();
     assert_eq!(
-        (tex.width, tex.height, &tex.texels[..]),
+        (tex.width, tex.height, &tex.linear_texels()[..]),
         (2, 2, &TEXELS[..])
     );
     // The same image as a data URI in a .gltf.
@@ -193,7 +193,7 @@ fn embedded_base_colour_textures_keep_their_wrap_modes() {
     let (model, _) = parse(&bytes).unwrap();
     assert_eq!(model.materials[0].texture.as_deref(), Some(want.as_str()));
     let tex = image_in(&bytes, Path::new("t.glb"), 0, &mut no_files).unwrap();
-    assert_eq!(tex.texels, TEXELS);
+    assert_eq!(tex.linear_texels(), TEXELS);
     // An image file: its absolute path, read by the scene builder as any texture file.
     let (d, bin) = textured(json!({"uri": "my%20tex.png"}));
     let (model, _) = parse(&glb(&d, &bin)).unwrap();
