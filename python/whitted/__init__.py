@@ -36,11 +36,9 @@ if _slow:
 INVALID_ID: int = _whitted.INVALID_ID
 
 
-
 def builtin_scenes() -> List[str]:
     """The names of the built-in scenes (``"demo"``, ``"phong"``, ...)."""
     return list(_whitted.builtin_scenes())
-
 
 
 def load_mesh(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:

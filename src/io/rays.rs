@@ -30,8 +30,20 @@ pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
     let io = |e| Error::io(path, e);
     let mut file = std::fs::File::open(path).map_err(io)?;
+    // (0 for a pipe, whose rays arrive as they come)
     let expect = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut rays = Vec::with_capacity(usize::try_from(expect / RAY_BYTES as u64).unwrap_or(0));
+    if expect > MAX_RAY_FILE_BYTES {
+        return Err(too_big(expect, path));
+    }
+    let mut rays = Vec::new();
+    let count = (expect / RAY_BYTES as u64) as usize;
+    rays.try_reserve_exact(count).map_err(|_| {
+        Error::parse(
+            path,
+            0,
+            format!("{count} rays ({expect} bytes) do not fit in this machine's memory"),
+        )
+    })?;
     let mut buf = vec![0u8; 1 << 20];
     // bytes of `buf` held (a record may straddle two reads), and the file's bytes so far
     let (mut held, mut total) = (0usize, 0u64);
@@ -43,6 +55,9 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
             Err(e) => return Err(io(e)),
         };
         total += n as u64;
+        if total > MAX_RAY_FILE_BYTES {
+            return Err(too_big(total, path));
+        }
         held += n;
         let whole = held - held % RAY_BYTES;
         rays.extend(buf[..whole].chunks_exact(RAY_BYTES).map(ray_of));
@@ -53,6 +68,18 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
         return Err(not_whole(total, path));
     }
     Ok(rays)
+}
+
+/// The largest ray file read: 2^31 rays (64 GiB), past which a file (or a pipe that goes on)
+/// is refused rather than left to exhaust memory.
+pub const MAX_RAY_FILE_BYTES: u64 = (RAY_BYTES as u64) << 31;
+
+fn too_big(bytes: u64, path: &Path) -> Error {
+    Error::parse(
+        path,
+        0,
+        format!("{bytes} bytes of rays is over the cap of {MAX_RAY_FILE_BYTES} (2^31 rays)"),
+    )
 }
 
 fn not_whole(bytes: u64, path: &Path) -> Error {
@@ -173,6 +200,15 @@ mod tests {
         assert_eq!(read_rays(&path).unwrap(), vec![]);
         let e = read_rays(&dir.join("missing.bin")).unwrap_err().to_string();
         assert!(e.contains("missing.bin"), "{e}");
+        // an absurd size (a sparse file: no disk, no memory) is refused before anything is
+        // allocated or read
+        let huge = dir.join("huge.bin");
+        let f = std::fs::File::create(&huge).unwrap();
+        f.set_len(MAX_RAY_FILE_BYTES + RAY_BYTES as u64).unwrap();
+        drop(f);
+        let e = read_rays(&huge).unwrap_err().to_string();
+        assert!(e.contains("huge.bin") && e.contains("over the cap"), "{e}");
+        std::fs::remove_file(&huge).unwrap();
         let hits: Vec<Option<Hit>> = (0..50_000u32)
             .map(|i| {
                 (i % 3 != 0).then_some(Hit {
