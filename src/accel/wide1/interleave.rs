@@ -113,24 +113,45 @@ fn interleaved<W: Walk>(
 /// 1.6x.
 const INTERLEAVE_MIN_BYTES: usize = 4 << 20;
 
+/// Rays whose origins lie together but whose directions are apart (bounces) are walked
+/// interleaved only on a tree at least this large: on the bench's incoherent rays, one
+/// thread, AMD EPYC Zen 5 (32 MiB L3), interleaved against one after another: 82k
+/// triangles (5.8 MiB) 0.84x, 327k (23 MiB) 0.92x, 1.3M (93 MiB) 1.0-1.05x, 5.2M (360 MiB)
+/// 1.32x (docs/engines.md). Their first nodes and blocks, near the shared origins, stay in
+/// the caches from ray to ray; only where the rest of the tree is far larger than the
+/// last-level cache do the walks wait on memory as random rays' do.
+const SCATTERED_MIN_BYTES: usize = 128 << 20;
+
 /// Origins of a group of 16 rays this far apart, as a share of the scene's diagonal, on
 /// average over the sampled groups, mark a batch as scattered (as `engine::TOGETHER`).
 const APART: f32 = 0.2;
+
+/// Directions of a group of 16 rays this far apart (`1 - cos` of the widest angle to the
+/// group's first), on average over the sampled groups, mark a batch as scattered on a tree
+/// of [`SCATTERED_MIN_BYTES`] (ten times `engine::BEAM`: camera rays and shadow rays to a
+/// point light lie far below, diffuse bounces near 1 and above).
+const DIRECTIONS_APART: f32 = 0.1;
 
 /// Groups of 16 rays sampled by [`worth_it`].
 const SAMPLE: usize = 4;
 
 /// Whether `rays` are walked [`interleaved`]: on a tree larger than
 /// [`INTERLEAVE_MIN_BYTES`], when a sample of groups of 16 consecutive rays shows origins
-/// apart (random rays, inside/outside tests). Rays in order (camera rays, the shadow rays
-/// of their hits) are walked one after another: consecutive walks find the same nodes in
-/// the caches and take the same branches, and a walk that tests a leaf a step late
-/// descends before its limit drops; interleaved, at 1.3M triangles, `wide1` traced camera
-/// rays at 0.73x, their hits at 0.87x and shadow rays at 0.77x (bench, one thread).
+/// apart (random rays, inside/outside tests), and on a tree of [`SCATTERED_MIN_BYTES`] also
+/// when it shows directions apart (bounces). Rays in order (camera rays, the shadow rays of
+/// their hits) are walked one after another: consecutive walks find the same nodes in the
+/// caches and take the same branches, and a walk that tests a leaf a step late descends
+/// before its limit drops; interleaved, at 1.3M triangles, `wide1` traced camera rays at
+/// 0.73x, their hits at 0.87x and shadow rays at 0.77x (bench, one thread).
 #[inline(always)]
 pub(super) fn worth_it(accel: &Accel, rays: &[Ray]) -> bool {
-    let bvh = &accel.wide;
-    if bvh.bytes() < INTERLEAVE_MIN_BYTES {
+    worth_it_at(accel, rays, accel.wide.bytes())
+}
+
+/// [`worth_it`] as if the tree took `bytes`.
+#[inline(always)]
+fn worth_it_at(accel: &Accel, rays: &[Ray], bytes: usize) -> bool {
+    if bytes < INTERLEAVE_MIN_BYTES {
         return false;
     }
     let Some(root) = accel.nodes.first() else {
@@ -142,17 +163,24 @@ pub(super) fn worth_it(accel: &Accel, rays: &[Ray]) -> bool {
         return false;
     }
     let n = groups.min(SAMPLE);
-    let mut apart = 0.0;
+    let (mut apart, mut turned) = (0.0, 0.0);
     for k in 0..n {
         let group = &rays[k * groups / n * 16..][..16];
-        let o = group[0].origin;
+        let (o, d) = (group[0].origin, group[0].dir.normalize_or_zero());
         let far = group
             .iter()
             .map(|r| (r.origin - o).length())
             .fold(0.0, f32::max);
         apart += (far / diagonal).min(1.0);
+        // (NaN, a zero direction: counted as apart)
+        let cos = group
+            .iter()
+            .map(|r| r.dir.normalize_or_zero().dot(d))
+            .fold(1.0, |m: f32, c| if c.is_nan() { -1.0 } else { m.min(c) });
+        turned += 1.0 - cos;
     }
     apart >= APART * n as f32
+        || (bytes >= SCATTERED_MIN_BYTES && turned >= DIRECTIONS_APART * n as f32)
 }
 
 /// [`interleaved`] with the thread's stack, grown for [`INTERLEAVE`] walks (nothing on an
@@ -200,5 +228,52 @@ impl<K: Kind> Walk for Walker<K> {
     #[inline(always)]
     fn next(&self) -> u32 {
         self.cur
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::BuildQuality;
+    use glam::Vec3;
+
+    /// Bounces (origins together, directions apart) are interleaved on a tree of
+    /// [`SCATTERED_MIN_BYTES`] only; a beam never; random rays from [`INTERLEAVE_MIN_BYTES`].
+    #[test]
+    fn bounces_interleave_on_the_largest_trees_only() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/kitten.m");
+        let (mesh, _) = crate::io::load_mesh(&path).unwrap();
+        let tris: Vec<_> = mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| mesh.positions[i as usize]))
+            .collect();
+        let accel = Accel::build(&tris, BuildQuality::Binned);
+        // a cheap generator of spread directions (a golden-angle spiral) and positions
+        let dir = |i: usize| {
+            let z = 1.0 - 2.0 * ((i * 7919 % 1000) as f32 + 0.5) / 1000.0;
+            let a = i as f32 * 2.399_963;
+            let r = (1.0 - z * z).sqrt();
+            Vec3::new(r * a.cos(), r * a.sin(), z)
+        };
+        let at = |i: usize| mesh.positions[i * 7 % mesh.positions.len()];
+        let ray = |o: Vec3, d: Vec3| Ray::new(o, d, 0.0, f32::INFINITY);
+        // 4x4 blocks of bounces: each block's origins within a hundredth of the box
+        let bounces: Vec<Ray> = (0..256)
+            .map(|i| ray(at(i / 16) + dir(i) * 1e-3, dir(i)))
+            .collect();
+        let random: Vec<Ray> = (0..256).map(|i| ray(at(i) * 0.9, dir(i))).collect();
+        let eye = Vec3::new(1.6, 0.9, 4.4);
+        let beam: Vec<Ray> = (0..256).map(|i| ray(eye, at(i / 16) - eye)).collect();
+        let (small, large) = (INTERLEAVE_MIN_BYTES, SCATTERED_MIN_BYTES);
+        assert!(!worth_it_at(&accel, &bounces, small));
+        assert!(worth_it_at(&accel, &bounces, large));
+        assert!(worth_it_at(&accel, &random, small));
+        assert!(!worth_it_at(&accel, &random, small - 1));
+        assert!(!worth_it_at(&accel, &beam, large));
+        assert!(
+            !worth_it(&accel, &random),
+            "the kitten's tree fits the caches"
+        );
     }
 }
