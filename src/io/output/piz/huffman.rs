@@ -23,7 +23,8 @@ pub(super) struct Tables {
     freq: Box<[u32; SYMBOLS]>,
     /// Frequencies of the odd words, while counting.
     odd: Box<[u32; SYMBOLS]>,
-    lengths: Vec<u32>,
+    /// Code lengths (at most 58).
+    lengths: Vec<u8>,
     /// `code << 6 | length`.
     codes: Vec<u64>,
     /// `codes` in 32 bits, when every code fits.
@@ -158,21 +159,19 @@ pub(super) fn huffman(data: &[u16], out: &mut Vec<u8>, tables: &mut Tables) {
     // the symbols that occur, relative to `lo`, and their codes
     present_symbols(&freq[lo..=rle], present);
     code_lengths_of(&freq[lo..=rle], present, &mut lengths[lo..=rle], sort);
-    canonical(present, &lengths[lo..=rle], &mut codes[lo..=rle]);
+    let lengths = &lengths[lo..=rle];
+    let longest = present.iter().map(|&s| lengths[s as usize]).max();
+    let longest = longest.unwrap_or(0) as u32;
 
     let header = out.len();
     out.extend_from_slice(&[0; 20]);
     let table = out.len();
-    pack_lengths(present, &lengths[lo..=rle], rle + 1 - lo, out);
+    pack_lengths(present, lengths, rle + 1 - lo, out);
     let table_bytes = out.len() - table;
     let code_start = out.len();
-    let longest = present.iter().map(|&s| lengths[lo + s as usize]).max();
-    let longest = longest.unwrap_or(0);
     let nbits = if longest <= SHORT_CODE_BITS {
         // half the table's bytes in the cache: codes and lengths packed in 32 bits
-        for &s in present.iter() {
-            shorts[lo + s as usize] = codes[lo + s as usize] as u32;
-        }
+        canonical(present, lengths, &mut shorts[lo..=rle]);
         // as many codes to a put as surely fit in its 56 bits
         match longest {
             0..=14 => emit::<u32, 4>(data, shorts, rle, out, code_start),
@@ -180,6 +179,7 @@ pub(super) fn huffman(data: &[u16], out: &mut Vec<u8>, tables: &mut Tables) {
             _ => emit::<u32, 2>(data, shorts, rle, out, code_start),
         }
     } else {
+        canonical(present, lengths, &mut codes[lo..=rle]);
         emit::<u64, 1>(data, codes, rle, out, code_start)
     };
     for (k, v) in [lo, rle, table_bytes, nbits, 0].into_iter().enumerate() {
@@ -193,6 +193,8 @@ const SHORT_CODE_BITS: u32 = 26;
 /// A symbol's code and its length packed as `code << 6 | length`.
 pub(super) trait Packed: Copy {
     fn unpack(self) -> (u64, u32);
+    /// `code << 6 | length` (the code fits).
+    fn pack(code: u64, length: u32) -> Self;
 }
 
 impl Packed for u64 {
@@ -200,12 +202,20 @@ impl Packed for u64 {
     fn unpack(self) -> (u64, u32) {
         (self >> 6, (self & 63) as u32)
     }
+    #[inline(always)]
+    fn pack(code: u64, length: u32) -> Self {
+        code << 6 | length as u64
+    }
 }
 
 impl Packed for u32 {
     #[inline(always)]
     fn unpack(self) -> (u64, u32) {
         ((self >> 6) as u64, self & 63)
+    }
+    #[inline(always)]
+    fn pack(code: u64, length: u32) -> Self {
+        (code << 6) as u32 | length
     }
 }
 
@@ -279,8 +289,11 @@ pub(super) fn emit<C: Packed, const PER: usize>(
 pub(super) fn code_lengths(freq: &[u32], lengths: &mut [u32]) {
     let mut present = Vec::new();
     present_symbols(freq, &mut present);
-    lengths.fill(0);
-    code_lengths_of(freq, &present, lengths, &mut Sorted::default());
+    let mut short = vec![0u8; lengths.len()];
+    code_lengths_of(freq, &present, &mut short, &mut Sorted::default());
+    for (l, &s) in lengths.iter_mut().zip(&short) {
+        *l = s as u32;
+    }
     debug_assert!(lengths.iter().all(|&l| l <= MAX_CODE_BITS));
 }
 
@@ -299,7 +312,7 @@ fn present_symbols(freq: &[u32], present: &mut Vec<u32>) {
 
 /// [`code_lengths`] given the symbols that occur (`present`, in order): their lengths are
 /// written, the other entries of `lengths` left as they are.
-fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32], sort: &mut Sorted) {
+fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u8], sort: &mut Sorted) {
     // counting sort of them by frequency, frequencies below `SMALL` by bucket
     let mut count = [0u32; SMALL + 1];
     let Sorted {
@@ -341,7 +354,7 @@ fn code_lengths_of(freq: &[u32], present: &[u32], lengths: &mut [u32], sort: &mu
     }
     minimum_redundancy(&mut weight[..n]);
     for (&s, &l) in order[..n].iter().zip(&weight[..n]) {
-        lengths[s as usize] = l;
+        lengths[s as usize] = l as u8;
     }
 }
 
@@ -412,7 +425,7 @@ fn minimum_redundancy(a: &mut [u32]) {
 /// (`hufCanonicalCodeTable`: per length, consecutive codes in symbol order, longer codes
 /// below shorter ones): `code << 6 | length` into `codes` for each symbol of `present` (the
 /// symbols of nonzero length, in order; the other entries are left as they are).
-fn canonical(present: &[u32], lengths: &[u32], codes: &mut [u64]) {
+fn canonical<C: Packed>(present: &[u32], lengths: &[u8], codes: &mut [C]) {
     let mut first = [0u64; 59];
     for &s in present {
         first[lengths[s as usize] as usize] += 1;
@@ -427,13 +440,13 @@ fn canonical(present: &[u32], lengths: &[u32], codes: &mut [u64]) {
         let l = lengths[s as usize];
         let code = first[l as usize];
         first[l as usize] += 1;
-        codes[s as usize] = code << 6 | l as u64;
+        codes[s as usize] = C::pack(code, l as u32);
     }
 }
 
 /// The code-length table (`hufPackEncTable`) of `n` symbols: 6 bits per length, zero runs
 /// shortened; `present` lists the symbols of nonzero length, in order (the others' are 0).
-fn pack_lengths(present: &[u32], lengths: &[u32], n: usize, out: &mut Vec<u8>) {
+fn pack_lengths(present: &[u32], lengths: &[u8], n: usize, out: &mut Vec<u8>) {
     let mut bits = Bits::new(out);
     let mut next = 0;
     for &s in present {
