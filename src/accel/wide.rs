@@ -552,4 +552,4 @@ pub fn from_cwbvh(accel: &Accel, cw: &obvhs::cwbvh::CwBvh) -> Bvh8 {
 }
 
 #[cfg(test)]
-mod tests;
+pub(super) mod tests;

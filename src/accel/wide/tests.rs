@@ -2,7 +2,7 @@ use super::*;
 use crate::accel::BuildQuality;
 
 /// The shipped kitten's triangles and their acceleration structure.
-fn kitten() -> (Vec<[glam::Vec3; 3]>, Accel) {
+pub(in crate::accel) fn kitten() -> (Vec<[glam::Vec3; 3]>, Accel) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/kitten.m");
     let (mesh, _) = crate::io::load_mesh(&path).unwrap();
     let tris: Vec<_> = mesh

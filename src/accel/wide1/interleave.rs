@@ -234,21 +234,13 @@ impl<K: Kind> Walk for Walker<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::BuildQuality;
     use glam::Vec3;
 
     /// Bounces (origins together, directions apart) are interleaved on a tree of
     /// [`SCATTERED_MIN_BYTES`] only; a beam never; random rays from [`INTERLEAVE_MIN_BYTES`].
     #[test]
     fn bounces_interleave_on_the_largest_trees_only() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/kitten.m");
-        let (mesh, _) = crate::io::load_mesh(&path).unwrap();
-        let tris: Vec<_> = mesh
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| mesh.positions[i as usize]))
-            .collect();
-        let accel = Accel::build(&tris, BuildQuality::Binned);
+        let (tris, accel) = crate::accel::wide::tests::kitten();
         // a cheap generator of spread directions (a golden-angle spiral) and positions
         let dir = |i: usize| {
             let z = 1.0 - 2.0 * ((i * 7919 % 1000) as f32 + 0.5) / 1000.0;
@@ -256,7 +248,7 @@ mod tests {
             let r = (1.0 - z * z).sqrt();
             Vec3::new(r * a.cos(), r * a.sin(), z)
         };
-        let at = |i: usize| mesh.positions[i * 7 % mesh.positions.len()];
+        let at = |i: usize| tris[i * 7 % tris.len()][0];
         let ray = |o: Vec3, d: Vec3| Ray::new(o, d, 0.0, f32::INFINITY);
         // 4x4 blocks of bounces: each block's origins within a hundredth of the box
         let bounces: Vec<Ray> = (0..256)
