@@ -15,9 +15,10 @@
 //! the loaders' warnings), [`render::World`] holds a scene with its BVH, [`render::render`]
 //! renders with progress and statistics, [`trace`] traces ray files against a mesh.
 // No unsafe code but two system calls (`accel::pages`: huge-page advice, the allocator's
-// thresholds), the calls into the AVX-512 kernels after the CPU check (`accel::packet16`)
-// the prefetch hint of the interleaved walks (`accel::wide1::interleave`) and the output
-// file's early writeback request (`io::output::writeback`), allowed there alone.
+// thresholds), the calls into the AVX-512 kernels after the CPU check (`accel::packet16`),
+// the prefetch hint of the interleaved walks and the call into their AVX-512 VL build after
+// the same check (`accel::wide1::interleave`) and the output file's early writeback request
+// (`io::output::writeback`), allowed there alone.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which is the point.

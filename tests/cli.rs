@@ -116,12 +116,13 @@ fn trace_rays_writes_one_record_per_ray_and_engines_agree() {
     let input = tmp("rays.bin");
     std::fs::write(&input, whitted::io::rays::encode_rays(&rays)).unwrap();
     let mut outputs = Vec::new();
-    // (the 16-ray engines a second time without their AVX-512 kernels, as on a CPU without
-    // AVX-512: `WHITTED_NO_AVX512`)
+    // (the 16-ray engines and `wide`'s batch walks a second time without their AVX-512
+    // kernels, as on a CPU without AVX-512: `WHITTED_NO_AVX512`)
     for (engine, no512) in [
         ("auto", false),
         ("packet", false),
         ("wide", false),
+        ("wide", true),
         ("hybrid", false),
         ("packet16", false),
         ("hybrid16", false),

@@ -315,7 +315,7 @@ fn batches_given_by_index() {
 
 /// `wide1`'s batch calls walk scattered rays on a tree larger than the caches interleaved
 /// (the kitten subdivided once: 82k triangles, a 5.8 MiB tree), rays in order and small
-/// trees one after another; either way every hit is `intersect1`'s, bit for bit, and every
+/// trees two at a time; either way every hit is `intersect1`'s, bit for bit, and every
 /// occlusion `occluded1`'s, culled and not, whatever the batch's length.
 #[test]
 fn wide1_batches_interleaved_or_not_are_intersect1() {
@@ -341,8 +341,8 @@ fn wide1_batches_interleaved_or_not_are_intersect1() {
     };
     for (accel, rays) in [(&big, &random), (&big, &aimed), (&small, &random)] {
         for cull in [false, true] {
-            // (lengths that leave some of the eight walks idle at the end)
-            for n in [rays.len(), 37, 16] {
+            // (lengths that leave some of the eight walks, or one of two, idle at the end)
+            for n in [rays.len(), 37, 16, 1, 0] {
                 let rays = &rays[..n];
                 let mut hits = vec![None; n];
                 let mut occ = vec![false; n];

@@ -13,8 +13,8 @@
 //! than handed back to the kernel and faulted in again.
 //!
 //! One of the crate's four `unsafe` places (the others: `packet16`'s AVX-512 dispatch,
-//! `wide1::interleave`'s prefetch hint and `io::output::writeback`'s request), kept to the
-//! system calls.
+//! `wide1::interleave`'s prefetch hint and AVX-512 VL dispatch, and
+//! `io::output::writeback`'s request), kept to the system calls.
 
 /// Arrays smaller than this stay on small pages (a huge page is 2 MiB).
 const MIN_BYTES: usize = 4 << 20;

@@ -7,8 +7,9 @@
 //! the closest hit is the smallest `(t, triangle index)` whatever the visiting order.
 //!
 //! The walks themselves are in `walk` (closest and any hit, as steps over a walk's state);
-//! the batch calls (`intersect_wide1_many`, `occluded_wide1_many`) take eight walks at a
-//! time in turn, with prefetches (`interleave`).
+//! the batch calls (`intersect_wide1_many`, `occluded_wide1_many`) take several walks at a
+//! time in turn: eight with prefetches on scattered rays and a large tree, else two
+//! (`interleave`).
 
 mod interleave;
 mod walk;
@@ -21,7 +22,7 @@ use super::{Accel, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::{Hit, Ray};
 use crate::simd::{self, F32x8, M32x8, Vec3x8};
-use interleave::interleaved_batch;
+use interleave::batch;
 pub(super) use walk::walk;
 use walk::{Any, Closest};
 
@@ -246,31 +247,26 @@ pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
 }
 
 /// `intersect_wide1` on every ray of `rays`, into `out` (the same length): the same answers,
-/// the thread's stack borrowed once for the batch. Scattered rays on a tree larger than the
-/// caches are walked eight at a time in turn, each one's next node and leaf blocks
-/// prefetched (`interleave`, which says when; docs/engines.md has the measurements).
+/// the thread's stack borrowed once for the batch. The walks take their steps in turn:
+/// scattered rays on a tree larger than the caches eight at a time, each one's next node and
+/// leaf blocks prefetched, other batches two at a time (`interleave`, which says when;
+/// docs/engines.md has the measurements).
 ///
 /// # Panics
 /// If `out` is shorter than `rays`.
 pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
     let out = &mut out[..rays.len()];
     out.fill(None);
-    if interleave::worth_it(accel, rays) {
-        interleaved_batch(accel, rays, cull, |i, w: &Closest| out[i] = w.found);
-    } else {
-        walk_each::<false>(accel, rays.iter().copied().enumerate(), cull, |i, h| {
-            out[i] = Some(h)
-        });
-    }
+    batch(accel, rays, cull, |i, w: &Closest| out[i] = w.found);
 }
 
-/// Whether [`intersect_wide1_many`] and [`occluded_wide1_many`] walk `rays` interleaved
-/// (scattered rays on a tree larger than the caches; see `interleave`).
+/// Whether [`intersect_wide1_many`] and [`occluded_wide1_many`] walk `rays` eight at a time
+/// with prefetches (scattered rays on a tree larger than the caches; see `interleave`).
 pub fn interleaves(accel: &Accel, rays: &[Ray]) -> bool {
     interleave::worth_it(accel, rays)
 }
 
-/// `occluded_wide1` on every ray of `rays`, into `out` (the same length), interleaved as
+/// `occluded_wide1` on every ray of `rays`, into `out` (the same length), walked in turn as
 /// [`intersect_wide1_many`].
 ///
 /// # Panics
@@ -278,18 +274,12 @@ pub fn interleaves(accel: &Accel, rays: &[Ray]) -> bool {
 pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [bool]) {
     let out = &mut out[..rays.len()];
     out.fill(false);
-    if interleave::worth_it(accel, rays) {
-        interleaved_batch(accel, rays, cull, |i, w: &Any| out[i] = w.found.is_some());
-    } else {
-        walk_each::<true>(accel, rays.iter().copied().enumerate(), cull, |i, _| {
-            out[i] = true
-        });
-    }
+    batch(accel, rays, cull, |i, w: &Any| out[i] = w.found.is_some());
 }
 
 /// One walk from the root per `(index, ray)`, the thread's stack borrowed once for all of
-/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree). What the batch
-/// entries (rays in order, or a tree the caches hold) and the packets' per-lane calls share.
+/// them; `hit(index, h)` for each ray that hits (nothing on an empty tree): the packets'
+/// per-lane calls.
 #[inline(always)]
 fn walk_each<const ANY_HIT: bool>(
     accel: &Accel,
