@@ -8,8 +8,8 @@
 //!
 //! The walks themselves are in `walk` (closest and any hit, as steps over a walk's state);
 //! the batch calls (`intersect_wide1_many`, `occluded_wide1_many`) take several walks at a
-//! time in turn: eight with prefetches on scattered rays and a large tree, else two
-//! (`interleave`).
+//! time in turn: eight with prefetches on scattered rays and a large tree, else two for
+//! closest hits (`interleave`).
 
 mod interleave;
 mod walk;
@@ -266,8 +266,9 @@ pub fn interleaves(accel: &Accel, rays: &[Ray]) -> bool {
     interleave::worth_it(accel, rays)
 }
 
-/// `occluded_wide1` on every ray of `rays`, into `out` (the same length), walked in turn as
-/// [`intersect_wide1_many`].
+/// `occluded_wide1` on every ray of `rays`, into `out` (the same length): scattered rays on
+/// a tree larger than the caches interleaved as in [`intersect_wide1_many`], other batches
+/// one ray after another.
 ///
 /// # Panics
 /// If `out` is shorter than `rays`.

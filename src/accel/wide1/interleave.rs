@@ -1,7 +1,8 @@
 //! Several single-ray walks at once: each takes one step (a node visit) in turn. Scattered rays on a tree larger than the caches are walked eight at a time, the
 //! node and leaf blocks each will read next prefetched, so that while one walk waits on
-//! memory the core works on the others; every other batch two at a time, whose steps, two
-//! independent chains of loads and tests, fill the core's pipeline better than one.
+//! memory the core works on the others; every other closest-hit batch two at a time, whose
+//! steps, two independent chains of loads and tests, fill the core's pipeline better than
+//! one.
 
 use super::RayWide;
 use super::walk::{Kind, Walker};
@@ -164,11 +165,30 @@ fn paired<W: Walk>(
     }
 }
 
-/// How [`batch`] walks: [`interleaved`] or [`paired`].
+/// The walks of `rays` one after another (any hit: [`Kind::PAIRED`]); `done(i, walk)` as
+/// ray `i`'s walk ends.
+#[inline(always)]
+fn single<W: Walk>(
+    accel: &Accel,
+    bvh: &Bvh8,
+    rays: &[Ray],
+    cull: bool,
+    stack: &mut [(u32, f32)],
+    mut done: impl FnMut(usize, &W),
+) {
+    let mut start = starts::<W>(rays);
+    while let Some((i, mut w)) = start() {
+        while !w.step_now(accel, bvh, cull, stack) {}
+        done(i, &w);
+    }
+}
+
+/// How [`batch`] walks: [`interleaved`], [`paired`] or one after another.
 #[derive(Clone, Copy)]
 enum Turns {
     Interleaved,
     Paired,
+    Single,
 }
 
 /// [`interleaved`] or [`paired`].
@@ -185,6 +205,7 @@ fn in_turn<W: Walk>(
     match turns {
         Turns::Interleaved => interleaved(accel, bvh, rays, cull, stack, done),
         Turns::Paired => paired(accel, bvh, rays, cull, stack, done),
+        Turns::Single => single(accel, bvh, rays, cull, stack, done),
     }
 }
 
@@ -231,7 +252,7 @@ fn in_turn_best<W: Walk>(
     stack: &mut [(u32, f32)],
     done: impl FnMut(usize, &W),
 ) {
-    if evex() {
+    if evex() && !matches!(turns, Turns::Single) {
         // SAFETY: `evex()` checked that the CPU has AVX-512 F and VL, the only features
         // `in_turn_evex` is compiled for beyond the crate's baseline.
         #[allow(unsafe_code)]
@@ -321,8 +342,8 @@ fn worth_it_at(accel: &Accel, rays: &[Ray], bytes: usize) -> bool {
 }
 
 /// The walks of `rays` (`done(i, walk)` as ray `i`'s ends): [`interleaved`] where
-/// [`worth_it`] says so, else [`paired`]; on the thread's stack, grown for them (nothing on
-/// an empty tree).
+/// [`worth_it`] says so, else [`paired`] (closest hit) or one after another (any hit); on
+/// the thread's stack, grown for them (nothing on an empty tree).
 #[inline(always)]
 pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl FnMut(usize, &W)) {
     let bvh = &accel.wide;
@@ -331,8 +352,10 @@ pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl
     }
     let turns = if worth_it(accel, rays) {
         Turns::Interleaved
-    } else {
+    } else if W::PAIRED {
         Turns::Paired
+    } else {
+        Turns::Single
     };
     STACK.with_borrow_mut(|stack| {
         let need = INTERLEAVE * stack_need(bvh);
@@ -346,6 +369,8 @@ pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl
 /// A walk that [`interleaved`] and [`paired`] step: made from a ray at the root, one node visit per step,
 /// then the node it visits next.
 pub(super) trait Walk: Copy {
+    /// Whether [`batch`] walks these two at a time ([`Kind::PAIRED`]).
+    const PAIRED: bool;
     /// The walk of `ray` from the root.
     fn root(ray: &Ray) -> Self;
     /// One node visit, its hit leaves tested at the next (their blocks prefetched
@@ -359,6 +384,7 @@ pub(super) trait Walk: Copy {
 }
 
 impl<K: Kind> Walk for Walker<K> {
+    const PAIRED: bool = K::PAIRED;
     #[inline(always)]
     fn root(ray: &Ray) -> Self {
         Walker::new(RayWide::new(ray), ray.tfar, 0)
