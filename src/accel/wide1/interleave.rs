@@ -1,8 +1,8 @@
-//! Several single-ray walks at once: each takes one step (a node visit) in turn. Scattered rays on a tree larger than the caches are walked eight at a time, the
-//! node and leaf blocks each will read next prefetched, so that while one walk waits on
-//! memory the core works on the others; every other closest-hit batch two at a time, whose
-//! steps, two independent chains of loads and tests, fill the core's pipeline better than
-//! one.
+//! Several single-ray walks at once, each taking one step (a node visit) in turn. Scattered
+//! rays on a tree larger than the caches are walked eight at a time, the node and leaf
+//! blocks each will read next prefetched, so that while one walk waits on memory the core
+//! works on the others; every other closest-hit batch two at a time, whose steps, two
+//! independent chains of loads and tests, fill the core's pipeline better than one.
 
 use super::RayWide;
 use super::walk::{Kind, Walker};
@@ -191,7 +191,7 @@ enum Turns {
     Single,
 }
 
-/// [`interleaved`] or [`paired`].
+/// [`interleaved`], [`paired`] or [`single`].
 #[inline(always)]
 fn in_turn<W: Walk>(
     turns: Turns,
@@ -264,8 +264,8 @@ fn in_turn_best<W: Walk>(
     }
 }
 
-/// Wide trees (nodes and blocks) smaller than this are walked one ray after another: they
-/// stay in the caches, and interleaving only adds its bookkeeping. Random rays, one thread,
+/// Wide trees (nodes and blocks) smaller than this are never [`interleaved`]: they stay in
+/// the caches, and interleaving only adds its bookkeeping. Random rays, one thread,
 /// AMD EPYC Zen 3 (32 MiB L3), interleaved against one after another: kitten (1.5 MiB
 /// tree) 0.93-1.0x, 82k triangles (5.8 MiB) 1.08x, 327k (23 MiB) 1.35x, 1.3M (93 MiB)
 /// 1.6x.
@@ -275,7 +275,7 @@ const INTERLEAVE_MIN_BYTES: usize = 4 << 20;
 /// interleaved only on a tree at least this large: on the bench's incoherent rays, one
 /// thread, AMD EPYC Zen 5 (32 MiB L3), interleaved against one after another: 82k
 /// triangles (5.8 MiB) 0.84x, 327k (23 MiB) 0.92x, 1.3M (93 MiB) 1.0-1.05x, 5.2M (360 MiB)
-/// 1.32x (docs/engines.md). Their first nodes and blocks, near the shared origins, stay in
+/// 1.3-1.5x (docs/engines.md). Their first nodes and blocks, near the shared origins, stay in
 /// the caches from ray to ray; only where the rest of the tree is far larger than the
 /// last-level cache do the walks wait on memory as random rays' do.
 const SCATTERED_MIN_BYTES: usize = 128 << 20;
@@ -297,8 +297,8 @@ const SAMPLE: usize = 4;
 /// [`INTERLEAVE_MIN_BYTES`], when a sample of groups of 16 consecutive rays shows origins
 /// apart (random rays, inside/outside tests), and on a tree of [`SCATTERED_MIN_BYTES`] also
 /// when it shows directions apart (bounces). Rays in order (camera rays, the shadow rays of
-/// their hits) are walked one after another: consecutive walks find the same nodes in the
-/// caches and take the same branches, and a walk that tests a leaf a step late descends
+/// their hits) are not: consecutive walks find the same nodes in the caches and take the
+/// same branches, and a walk that tests a leaf a step late descends
 /// before its limit drops; interleaved, at 1.3M triangles, `wide1` traced camera rays at
 /// 0.73x, their hits at 0.87x and shadow rays at 0.77x (bench, one thread).
 #[inline(always)]
@@ -366,8 +366,8 @@ pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl
     });
 }
 
-/// A walk that [`interleaved`] and [`paired`] step: made from a ray at the root, one node visit per step,
-/// then the node it visits next.
+/// A walk that [`interleaved`], [`paired`] and [`single`] step: made from a ray at the
+/// root, one node visit per step, then the node it visits next.
 pub(super) trait Walk: Copy {
     /// Whether [`batch`] walks these two at a time ([`Kind::PAIRED`]).
     const PAIRED: bool;
