@@ -165,33 +165,14 @@ fn paired<W: Walk>(
     }
 }
 
-/// The walks of `rays` one after another (any hit: [`Kind::PAIRED`]); `done(i, walk)` as
-/// ray `i`'s walk ends.
-#[inline(always)]
-fn single<W: Walk>(
-    accel: &Accel,
-    bvh: &Bvh8,
-    rays: &[Ray],
-    cull: bool,
-    stack: &mut [(u32, f32)],
-    mut done: impl FnMut(usize, &W),
-) {
-    let mut start = starts::<W>(rays);
-    while let Some((i, mut w)) = start() {
-        while !w.step_now(accel, bvh, cull, stack) {}
-        done(i, &w);
-    }
-}
-
-/// How [`batch`] walks: [`interleaved`], [`paired`] or one after another.
+/// How [`batch`] walks: [`interleaved`] or [`paired`].
 #[derive(Clone, Copy)]
 enum Turns {
     Interleaved,
     Paired,
-    Single,
 }
 
-/// [`interleaved`], [`paired`] or [`single`].
+/// [`interleaved`] or [`paired`].
 #[inline(always)]
 fn in_turn<W: Walk>(
     turns: Turns,
@@ -205,7 +186,6 @@ fn in_turn<W: Walk>(
     match turns {
         Turns::Interleaved => interleaved(accel, bvh, rays, cull, stack, done),
         Turns::Paired => paired(accel, bvh, rays, cull, stack, done),
-        Turns::Single => single(accel, bvh, rays, cull, stack, done),
     }
 }
 
@@ -252,7 +232,7 @@ fn in_turn_best<W: Walk>(
     stack: &mut [(u32, f32)],
     done: impl FnMut(usize, &W),
 ) {
-    if evex() && !matches!(turns, Turns::Single) {
+    if evex() {
         // SAFETY: `evex()` checked that the CPU has AVX-512 F and VL, the only features
         // `in_turn_evex` is compiled for beyond the crate's baseline.
         #[allow(unsafe_code)]
@@ -342,8 +322,9 @@ fn worth_it_at(accel: &Accel, rays: &[Ray], bytes: usize) -> bool {
 }
 
 /// The walks of `rays` (`done(i, walk)` as ray `i`'s ends): [`interleaved`] where
-/// [`worth_it`] says so, else [`paired`] (closest hit) or one after another (any hit); on
-/// the thread's stack, grown for them (nothing on an empty tree).
+/// [`worth_it`] says so, else [`paired`] (the any-hit batch call walks such batches one
+/// after another instead and comes here only to interleave); on the thread's stack, grown
+/// for them (nothing on an empty tree).
 #[inline(always)]
 pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl FnMut(usize, &W)) {
     let bvh = &accel.wide;
@@ -352,10 +333,8 @@ pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl
     }
     let turns = if worth_it(accel, rays) {
         Turns::Interleaved
-    } else if W::PAIRED {
-        Turns::Paired
     } else {
-        Turns::Single
+        Turns::Paired
     };
     STACK.with_borrow_mut(|stack| {
         let need = INTERLEAVE * stack_need(bvh);
@@ -366,11 +345,9 @@ pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl
     });
 }
 
-/// A walk that [`interleaved`], [`paired`] and [`single`] step: made from a ray at the
-/// root, one node visit per step, then the node it visits next.
+/// A walk that [`interleaved`] and [`paired`] step: made from a ray at the root, one node
+/// visit per step, then the node it visits next.
 pub(super) trait Walk: Copy {
-    /// Whether [`batch`] walks these two at a time ([`Kind::PAIRED`]).
-    const PAIRED: bool;
     /// The walk of `ray` from the root.
     fn root(ray: &Ray) -> Self;
     /// One node visit, its hit leaves tested at the next (their blocks prefetched
@@ -384,7 +361,6 @@ pub(super) trait Walk: Copy {
 }
 
 impl<K: Kind> Walk for Walker<K> {
-    const PAIRED: bool = K::PAIRED;
     #[inline(always)]
     fn root(ray: &Ray) -> Self {
         Walker::new(RayWide::new(ray), ray.tfar, 0)

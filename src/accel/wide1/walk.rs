@@ -87,9 +87,6 @@ pub(super) trait Kind: Sized {
     /// What the node test tells the leaves and inner children: entry distances (closest
     /// hit) or the boxes the ray starts in (any hit).
     type Info: Copy + Default;
-    /// Whether a batch's walks of this kind go two at a time where they are not
-    /// interleaved (`interleave::batch`).
-    const PAIRED: bool;
     /// [`Kind::Info`] of a node test.
     fn info(h: &NodeHits) -> Self::Info;
     /// The blocks of leaf `leaf` against the ray; `true` when the walk is over.
@@ -210,7 +207,6 @@ pub(super) struct ClosestHit;
 
 impl Kind for ClosestHit {
     type Info = [f32; 8];
-    const PAIRED: bool = true;
 
     #[inline(always)]
     fn info(h: &NodeHits) -> [f32; 8] {
@@ -321,9 +317,6 @@ fn origin_last(inside: u32) -> (u32, u32) {
 
 impl Kind for AnyHit {
     type Info = u32;
-    // (random rays through the Python package's `test_occlusions`, one thread, kitten:
-    // 0.159 s paired against 0.144 one after another, medians of 7 alternating calls)
-    const PAIRED: bool = false;
 
     #[inline(always)]
     fn info(h: &NodeHits) -> u32 {
