@@ -22,7 +22,7 @@ use super::{Accel, SLAB_FAR_SCALE, safe_inv};
 use crate::packet::{HitPacket8, RayPacket8};
 use crate::ray::{Hit, Ray};
 use crate::simd::{self, F32x8, M32x8, Vec3x8};
-use interleave::batch;
+use interleave::{Turns, batch};
 pub(super) use walk::walk;
 use walk::{Any, Closest};
 
@@ -257,7 +257,12 @@ pub fn occluded_wide1(accel: &Accel, ray: &Ray, cull: bool) -> bool {
 pub fn intersect_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [Option<Hit>]) {
     let out = &mut out[..rays.len()];
     out.fill(None);
-    batch(accel, rays, cull, |i, w: &Closest| out[i] = w.found);
+    let turns = if interleave::worth_it(accel, rays) {
+        Turns::Interleaved
+    } else {
+        Turns::Paired
+    };
+    batch(accel, rays, cull, turns, |i, w: &Closest| out[i] = w.found);
 }
 
 /// Whether [`intersect_wide1_many`] and [`occluded_wide1_many`] walk `rays` eight at a time
@@ -278,7 +283,8 @@ pub fn occluded_wide1_many(accel: &Accel, rays: &[Ray], cull: bool, out: &mut [b
     // (paired, any-hit walks ran slower: 2^20 random rays through the Python package's
     // `test_occlusions`, one thread, kitten, 0.159 s against 0.144 one after another)
     if interleave::worth_it(accel, rays) {
-        batch(accel, rays, cull, |i, w: &Any| out[i] = w.found.is_some());
+        let found = |i, w: &Any| out[i] = w.found.is_some();
+        batch(accel, rays, cull, Turns::Interleaved, found);
     } else {
         walk_each::<true>(accel, rays.iter().copied().enumerate(), cull, |i, _| {
             out[i] = true

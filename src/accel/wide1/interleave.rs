@@ -167,8 +167,10 @@ fn paired<W: Walk>(
 
 /// How [`batch`] walks: [`interleaved`] or [`paired`].
 #[derive(Clone, Copy)]
-enum Turns {
+pub(super) enum Turns {
+    /// [`INTERLEAVE`] at a time, prefetched.
     Interleaved,
+    /// Two at a time, closest hit only.
     Paired,
 }
 
@@ -219,29 +221,6 @@ fn evex() -> bool {
         #[cfg(not(target_arch = "x86_64"))]
         false
     })
-}
-
-/// [`in_turn`], compiled for the CPU's widest registers.
-#[inline(always)]
-fn in_turn_best<W: Walk>(
-    turns: Turns,
-    accel: &Accel,
-    bvh: &Bvh8,
-    rays: &[Ray],
-    cull: bool,
-    stack: &mut [(u32, f32)],
-    done: impl FnMut(usize, &W),
-) {
-    if evex() {
-        // SAFETY: `evex()` checked that the CPU has AVX-512 F and VL, the only features
-        // `in_turn_evex` is compiled for beyond the crate's baseline.
-        #[allow(unsafe_code)]
-        unsafe {
-            in_turn_evex(turns, accel, bvh, rays, cull, stack, done)
-        }
-    } else {
-        in_turn(turns, accel, bvh, rays, cull, stack, done)
-    }
 }
 
 /// Wide trees (nodes and blocks) smaller than this are never [`interleaved`]: they stay in
@@ -321,27 +300,38 @@ fn worth_it_at(accel: &Accel, rays: &[Ray], bytes: usize) -> bool {
         || (bytes >= SCATTERED_MIN_BYTES && turned >= DIRECTIONS_APART * n as f32)
 }
 
-/// The walks of `rays` (`done(i, walk)` as ray `i`'s ends): [`interleaved`] where
-/// [`worth_it`] says so, else [`paired`] (the any-hit batch call walks such batches one
-/// after another instead and comes here only to interleave); on the thread's stack, grown
-/// for them (nothing on an empty tree).
+/// The walks of `rays` taken in `turns` (`done(i, walk)` as ray `i`'s ends), on the
+/// thread's stack, grown for them (nothing on an empty tree), compiled for the CPU's widest
+/// registers ([`in_turn_evex`]). The callers choose: [`interleaved`] where [`worth_it`]
+/// says so, else [`paired`] for closest hits (the any-hit batch call walks such batches one
+/// after another instead).
 #[inline(always)]
-pub(super) fn batch<W: Walk>(accel: &Accel, rays: &[Ray], cull: bool, done: impl FnMut(usize, &W)) {
+pub(super) fn batch<W: Walk>(
+    accel: &Accel,
+    rays: &[Ray],
+    cull: bool,
+    turns: Turns,
+    done: impl FnMut(usize, &W),
+) {
     let bvh = &accel.wide;
     if bvh.nodes.is_empty() {
         return;
     }
-    let turns = if worth_it(accel, rays) {
-        Turns::Interleaved
-    } else {
-        Turns::Paired
-    };
     STACK.with_borrow_mut(|stack| {
         let need = INTERLEAVE * stack_need(bvh);
         if stack.len() < need {
             stack.resize(need, (0, 0.0));
         }
-        in_turn_best(turns, accel, bvh, rays, cull, stack, done)
+        if evex() {
+            // SAFETY: `evex()` checked that the CPU has AVX-512 F and VL, the only
+            // features `in_turn_evex` is compiled for beyond the crate's baseline.
+            #[allow(unsafe_code)]
+            unsafe {
+                in_turn_evex(turns, accel, bvh, rays, cull, stack, done)
+            }
+        } else {
+            in_turn(turns, accel, bvh, rays, cull, stack, done)
+        }
     });
 }
 
